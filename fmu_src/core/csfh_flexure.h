@@ -1,0 +1,46 @@
+/* Circular-arc flexure: closed-form compliance, co-rotated stiffness and the generalized elastic
+ * force on body 1 (PHYSICS.md sections 1.3, 2.2-2.5; paper Eqs. 5-9). Pure functions, SI units. */
+#ifndef CSFH_FLEXURE_H
+#define CSFH_FLEXURE_H
+
+/* Beam of the flexure: a circular arc clamped at the root C2, loaded at the tip C1. */
+typedef struct {
+    double rho;       /* m    radius of the centreline */
+    double beta;      /* rad  opening angle (0, 2 pi) */
+    double E;         /* Pa   Young's modulus */
+    double nu;        /* 1    Poisson's ratio */
+    double h;         /* m    in-plane section height */
+    double b;         /* m    out-of-plane section width */
+    double kappa;     /* 1    shear correction factor (6/5 for a rectangle) */
+    int bending_only; /* 1: bending compliance only; 0: bending + axial + shear */
+} csfh_arc_beam_t;
+
+/* Everything the force evaluation needs, computed once from the parameters. */
+typedef struct {
+    double K0[3][3];  /* stiffness at C1 in the body frame (= global at theta = 0) [N/m, N, N m] */
+    double sbar[2];   /* G1 -> C1 in the body frame, m */
+    int conservative; /* 1: fixed K0 (exact potential); 0: co-rotated K(theta) */
+} csfh_flexure_t;
+
+/* Tip compliance C in the tip frame (n, t, phi) of PHYSICS.md 2.2:
+ * [dp_n, dp_t, dphi] = C [F_n, F_t, M]. Units m/N, 1/N, 1/(N m). */
+void csfh_arc_compliance(const csfh_arc_beam_t *beam, double C[3][3]);
+
+/* Inverse of a 3x3 matrix; returns 0 on success, -1 if singular or not finite. */
+int csfh_mat3_inverse(const double A[3][3], double Ainv[3][3]);
+
+/* Angle of the local frame R_nt = [n t] = A(angle) at the tip: the beam tangent at C1 for a
+ * counter-clockwise arc from the root at phi_root (PHYSICS.md 1.3): phi_root + beta + pi/2. */
+double csfh_flexure_frame_angle(double phi_root, double beta);
+
+/* Precompute K0 = blk(R_nt) inv(C) blk(R_nt)^T and the attachment point
+ * sbar = O_F + rho [cos(phi_root + beta), sin(phi_root + beta)] (G1 at the origin, theta0 = 0,
+ * PHYSICS.md 1.2). Returns 0 on success, -1 if the compliance is singular. */
+int csfh_flexure_setup(const csfh_arc_beam_t *beam, const double OF[2], double phi_root,
+                       int conservative, csfh_flexure_t *flex);
+
+/* Generalized elastic force of the beam ON body 1, reduced to G1, at q = [x, y, theta]:
+ * Q_e = -T_e(s) K(theta) dp (PHYSICS.md 2.4). Returns the elastic energy 1/2 dp^T K dp [J]. */
+double csfh_flexure_force(const csfh_flexure_t *flex, const double q[3], double Q[3]);
+
+#endif

@@ -1,0 +1,324 @@
+#include "csfh_model.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "csfh_friction.h"
+#include "csfh_variables.h"
+
+static void count(int *counter)
+{
+    if (*counter < INT_MAX) {
+        (*counter)++;
+    }
+}
+
+const csfh_variable_t *csfh_variable_by_vr(unsigned int vr)
+{
+    for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES; i++) {
+        if (csfh_variables[i].vr == vr) {
+            return &csfh_variables[i];
+        }
+    }
+    return NULL;
+}
+
+const csfh_variable_t *csfh_variable_by_name(const char *name)
+{
+    if (name == NULL) {
+        return NULL;
+    }
+    for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES; i++) {
+        if (strcmp(csfh_variables[i].name, name) == 0) {
+            return &csfh_variables[i];
+        }
+    }
+    return NULL;
+}
+
+double *csfh_variable_real(csfh_model_t *m, const csfh_variable_t *v)
+{
+    return (double *)((char *)m + v->offset);
+}
+
+int *csfh_variable_int(csfh_model_t *m, const csfh_variable_t *v)
+{
+    return (int *)((char *)m + v->offset);
+}
+
+void csfh_model_set_defaults(csfh_model_t *m)
+{
+    memset(m, 0, sizeof(*m));
+    for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES; i++) {
+        const csfh_variable_t *v = &csfh_variables[i];
+        if (!v->has_start) {
+            continue;
+        }
+        if (v->type == CSFH_TYPE_REAL) {
+            *csfh_variable_real(m, v) = v->start;
+        } else {
+            *csfh_variable_int(m, v) = (int)v->start;
+        }
+    }
+}
+
+int csfh_check_value(const csfh_variable_t *v, double value, char *msg, size_t msg_size)
+{
+    if (!isfinite(value)) {
+        snprintf(msg, msg_size, "%s = %g is not finite", v->name, value);
+        return -1;
+    }
+    if (!v->has_range) {
+        return 0;
+    }
+    const int below = v->lo_open ? !(value > v->lo) : !(value >= v->lo);
+    const int above = v->hi_open ? !(value < v->hi) : !(value <= v->hi);
+    if (below || above) {
+        if (v->type == CSFH_TYPE_ENUMERATION) {
+            snprintf(msg, msg_size, "%s = %d is not a valid enumeration value (%g..%g)", v->name,
+                     (int)value, v->lo, v->hi);
+        } else if (v->type == CSFH_TYPE_BOOLEAN) {
+            snprintf(msg, msg_size, "%s = %d is not a Boolean (0 or 1)", v->name, (int)value);
+        } else {
+            snprintf(msg, msg_size, "%s = %.17g is out of range %c%.17g, %.17g%c", v->name, value,
+                     v->lo_open ? '(' : '[', v->lo, v->hi, v->hi_open ? ')' : ']');
+        }
+        return -1;
+    }
+    return 0;
+}
+
+static int check_all_values(csfh_model_t *m, char *msg, size_t msg_size)
+{
+    for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES; i++) {
+        const csfh_variable_t *v = &csfh_variables[i];
+        const int checked = v->causality == CSFH_CAUS_PARAMETER || v->is_state ||
+                            v->causality == CSFH_CAUS_INPUT;
+        if (!checked) {
+            continue;
+        }
+        const double value = v->type == CSFH_TYPE_REAL ? *csfh_variable_real(m, v)
+                                                       : (double)*csfh_variable_int(m, v);
+        if (csfh_check_value(v, value, msg, msg_size) != 0) {
+            return -1;
+        }
+    }
+    return 0;
+}
+
+int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
+{
+    const csfh_params_t *p = &m->p;
+    if (check_all_values(m, msg, msg_size) != 0) {
+        return -1;
+    }
+    /* cross-checks */
+    if (!(p->R1 < p->R2)) {
+        snprintf(msg, msg_size, "contact.R1 = %.17g must be smaller than contact.R2 = %.17g",
+                 p->R1, p->R2);
+        return -1;
+    }
+    if (!(p->v1 > p->v0)) {
+        snprintf(msg, msg_size, "friction.v1 = %.17g must be greater than friction.v0 = %.17g",
+                 p->v1, p->v0);
+        return -1;
+    }
+    csfh_derived_t d;
+    memset(&d, 0, sizeof(d));
+    d.delta = p->R2 - p->R1;
+    if (p->K_from_materials) {
+        d.K_spheres = csfh_stiffness_spheres(p->E1, p->nu1, p->E2, p->nu2, p->R1, p->R2,
+                                             p->Reff_internal);
+        d.K_cylinders = csfh_stiffness_cylinders(p->E1, p->nu1, p->E2, p->nu2, p->L);
+    } else {
+        d.K_spheres = p->K_spheres_given;
+        d.K_cylinders = p->K_cylinders_given;
+    }
+    d.xi = csfh_damping_factor((csfh_contact_law_t)p->law, p->cr);
+    csfh_esdu_setup(p->E1, p->nu1, p->E2, p->nu2, p->L, d.delta, p->esdu_sigma_pi,
+                    &d.normal.esdu);
+    d.esdu_F_max = d.normal.esdu.F_max;
+    d.normal.law = (csfh_contact_law_t)p->law;
+    d.normal.esdu_reading = (csfh_esdu_reading_t)p->esdu_reading;
+    d.normal.xi = d.xi;
+    d.normal.v_min = p->v_min;
+    if (p->law == CSFH_CONTACTLAW_LN_CYLINDERS) {
+        d.normal.K = d.K_cylinders;
+        d.normal.n = p->n_cylinders;
+    } else {
+        d.normal.K = d.K_spheres; /* spheres, HC, Flores; the exponent of LN-ESDU I3 */
+        d.normal.n = p->n_spheres;
+    }
+    const csfh_arc_beam_t beam = {p->rho, p->beta, p->Eh, p->nuh, p->h, p->b, p->kappa,
+                                  p->bending_only};
+    if (csfh_flexure_setup(&beam, p->OF, p->phi_root, p->conservative, &d.flexure) != 0) {
+        snprintf(msg, msg_size,
+                 "flexure: the compliance matrix is singular for flexure.rho = %g, "
+                 "flexure.beta = %g, flexure.h = %g",
+                 p->rho, p->beta, p->h);
+        return -1;
+    }
+    d.sbar[0] = d.flexure.sbar[0];
+    d.sbar[1] = d.flexure.sbar[1];
+    const double derived[] = {d.delta, d.K_spheres, d.K_cylinders, d.xi, d.esdu_F_max,
+                              d.sbar[0], d.sbar[1]};
+    for (size_t i = 0; i < sizeof(derived) / sizeof(derived[0]); i++) {
+        if (!isfinite(derived[i])) {
+            snprintf(msg, msg_size, "a derived quantity is not finite (check the parameters)");
+            return -1;
+        }
+    }
+    m->d = d;
+    return 0;
+}
+
+void csfh_model_smooth_forces(csfh_model_t *m, const double q[3], double Q[3])
+{
+    Q[0] = m->u_in[0];
+    Q[1] = m->u_in[1] - m->p.m1 * m->p.g; /* Q_g = [0, -m1 g, 0] */
+    Q[2] = m->u_in[2];
+    if (m->p.flexure_enabled) {
+        double Qe[3];
+        count(&m->counters.flexure);
+        csfh_flexure_force(&m->d.flexure, q, Qe);
+        Q[0] += Qe[0];
+        Q[1] += Qe[1];
+        Q[2] += Qe[2];
+    }
+}
+
+void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
+                        csfh_contact_eval_t *c)
+{
+    c->touching = 0;
+    c->F_N = c->F_T = 0.0;
+    c->rho = c->rho_dot = 0.0;
+    c->status = CSFH_LAW_OK;
+    if (m->p.law == CSFH_CONTACTLAW_NONE) {
+        return;
+    }
+    count(&m->counters.contact);
+    const double gap = csfh_contact_gap(m->d.delta, m->p.s1bar, q);
+    if (!(gap < 0.0)) {
+        return;
+    }
+    c->touching = 1;
+    csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, q, &c->kin);
+    c->rho = -c->kin.gap;
+    c->rho_dot = -(c->kin.DN[0] * u[0] + c->kin.DN[1] * u[1] + c->kin.DN[2] * u[2]);
+    /* the onset rate captured at the event; a state inside the gap that the integrator probes
+     * before the event is located uses its own rate (continuous at the event) */
+    const double onset = m->z.in_contact ? m->z.onset_speed : c->rho_dot;
+    c->status = csfh_normal_force(&m->d.normal, c->rho, c->rho_dot, onset, &c->F_N);
+    if (m->p.friction_enabled && c->F_N > 0.0) {
+        count(&m->counters.friction);
+        const double v_T = c->kin.DT[0] * u[0] + c->kin.DT[1] * u[1] + c->kin.DT[2] * u[2];
+        c->F_T = csfh_ambrosio_force(m->p.fd, m->p.v0, m->p.v1, c->F_N, v_T);
+    }
+}
+
+int csfh_model_derivatives(csfh_model_t *m, const double x[6], double xdot[6])
+{
+    count(&m->counters.rhs);
+    double Q[3];
+    csfh_model_smooth_forces(m, x, Q);
+    csfh_contact_eval_t c;
+    csfh_model_contact(m, x, x + 3, &c);
+    if (c.touching) {
+        csfh_contact_add_force(&c.kin, c.F_N, c.F_T, Q);
+    }
+    xdot[0] = x[3];
+    xdot[1] = x[4];
+    xdot[2] = x[5];
+    xdot[3] = Q[0] / m->p.m1;
+    xdot[4] = Q[1] / m->p.m1;
+    xdot[5] = Q[2] / m->p.I1;
+    for (int i = 0; i < 6; i++) {
+        if (!isfinite(xdot[i])) {
+            return CSFH_ERR_NONFINITE;
+        }
+    }
+    return c.status == CSFH_LAW_ESDU_CLAMPED ? CSFH_WARN_ESDU_CLAMPED : CSFH_OK;
+}
+
+double csfh_model_event_indicator(const csfh_model_t *m, const double x[6])
+{
+    if (m->p.law == CSFH_CONTACTLAW_NONE) {
+        return 1.0;
+    }
+    const double gap = csfh_contact_gap(m->d.delta, m->p.s1bar, x);
+    /* out of contact: z = g (onset where g falls through 0); in contact: z = g - 2 eps (release
+     * where g rises through 2 eps). Each mode switch leaves z at about -2 eps or +2 eps. */
+    return m->z.in_contact ? gap - 2.0 * m->p.gap_hysteresis : gap;
+}
+
+static double indentation_rate(const csfh_model_t *m)
+{
+    csfh_contact_kin_t kin;
+    csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, m->x, &kin);
+    return -(kin.DN[0] * m->x[3] + kin.DN[1] * m->x[4] + kin.DN[2] * m->x[5]);
+}
+
+int csfh_model_event_update(csfh_model_t *m)
+{
+    if (m->p.law == CSFH_CONTACTLAW_NONE) {
+        return 0;
+    }
+    const double gap = csfh_contact_gap(m->d.delta, m->p.s1bar, m->x);
+    const double eps = m->p.gap_hysteresis;
+    if (!m->z.in_contact && gap <= eps) {
+        m->z.in_contact = 1;
+        count(&m->z.contact_count);
+        m->z.onset_speed = indentation_rate(m); /* pre-impact rate, used until release */
+        return 1;
+    }
+    if (m->z.in_contact && gap >= eps) {
+        m->z.in_contact = 0;
+        return 2;
+    }
+    return 0;
+}
+
+void csfh_model_init_discrete(csfh_model_t *m)
+{
+    m->z.in_contact = 0;
+    m->z.contact_count = 0;
+    m->z.onset_speed = 0.0;
+    csfh_model_event_update(m);
+}
+
+int csfh_model_outputs(csfh_model_t *m)
+{
+    csfh_outputs_t *o = &m->out;
+    const double *x = m->x;
+    csfh_contact_eval_t c;
+    csfh_model_contact(m, x, x + 3, &c);
+    o->F_N = c.F_N;
+    o->F_T = c.F_T;
+    if (c.touching) {
+        o->gap = c.kin.gap;
+        o->indentation = c.rho;
+        o->indentation_rate = c.rho_dot;
+        o->v_T = c.kin.DT[0] * x[3] + c.kin.DT[1] * x[4] + c.kin.DT[2] * x[5];
+    } else {
+        csfh_contact_kin_t kin;
+        csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, x, &kin);
+        o->gap = kin.gap;
+        o->indentation = 0.0;
+        o->indentation_rate = -(kin.DN[0] * x[3] + kin.DN[1] * x[4] + kin.DN[2] * x[5]);
+        o->v_T = kin.DT[0] * x[3] + kin.DT[1] * x[4] + kin.DT[2] * x[5];
+    }
+    o->E_kinetic = 0.5 * m->p.m1 * (x[3] * x[3] + x[4] * x[4]) + 0.5 * m->p.I1 * x[5] * x[5];
+    o->E_gravity = m->p.m1 * m->p.g * x[1];
+    o->E_flexure = 0.0;
+    if (m->p.flexure_enabled) {
+        double Qe[3];
+        count(&m->counters.flexure);
+        o->E_flexure = csfh_flexure_force(&m->d.flexure, x, Qe);
+    }
+    o->E_contact = c.touching ? csfh_normal_elastic_energy(&m->d.normal, c.rho) : 0.0;
+    o->E_total = o->E_kinetic + o->E_gravity + o->E_flexure + o->E_contact;
+    return c.status == CSFH_LAW_ESDU_CLAMPED ? CSFH_WARN_ESDU_CLAMPED : CSFH_OK;
+}

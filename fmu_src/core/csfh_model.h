@@ -1,0 +1,138 @@
+/* The CSFH model: parameters, states and the right-hand side of M q'' = Q_e + Q_g + Q_c + Q_ext
+ * (PHYSICS.md conventions, paper Eqs. 27-30), plus the contact mode logic of the event-driven
+ * compliant models. No FMI types here: the FMI glue, the CVODE co-simulation and the Python
+ * harness (through the core library) call these functions. */
+#ifndef CSFH_MODEL_H
+#define CSFH_MODEL_H
+
+#include <stddef.h>
+
+#include "csfh_contact.h"
+#include "csfh_enums.h"
+#include "csfh_flexure.h"
+#include "csfh_normal_law.h"
+#include "csfh_vartable.h"
+
+/* User parameters, one field per FMI parameter (names in modelDescription/variables.toml). */
+typedef struct {
+    /* body 1 and gravity */
+    double m1, I1;     /* kg, kg m^2 */
+    double s1bar[2];   /* O1 relative to G1, body frame, m */
+    double g;          /* m/s^2, along -Y */
+    /* contact */
+    int law;           /* csfh_contact_law_t */
+    double R1, R2;     /* m */
+    double E1, E2, nu1, nu2;
+    double L;          /* contact length, m */
+    double cr;
+    double n_spheres, n_cylinders;
+    int Reff_internal, K_from_materials;
+    double K_spheres_given, K_cylinders_given;
+    int esdu_reading;  /* csfh_esdu_reading_t */
+    int esdu_sigma_pi;
+    double v_min;      /* m/s */
+    double gap_hysteresis; /* m */
+    /* friction */
+    int friction_enabled;
+    double fd, fa, v0, v1;
+    /* flexure */
+    int flexure_enabled, bending_only, conservative;
+    double rho, beta, OF[2], phi_root, h, b, Eh, nuh, kappa;
+} csfh_params_t;
+
+/* Quantities derived from the parameters (csfh_model_prepare). */
+typedef struct {
+    double delta;       /* R2 - R1 */
+    double K_spheres, K_cylinders, xi, esdu_F_max;
+    double sbar[2];     /* flexure attachment, body frame */
+    csfh_flexure_t flexure;
+    csfh_normal_law_t normal;
+} csfh_derived_t;
+
+/* Discrete state of the event-driven compliant contact. */
+typedef struct {
+    int in_contact;       /* contact mode */
+    int contact_count;    /* number of onsets */
+    double onset_speed;   /* indentation rate captured at the onset, m/s (raw, floored at use) */
+} csfh_discrete_t;
+
+typedef struct {
+    int rhs, flexure, contact, friction; /* evaluation counters (saturate at INT_MAX) */
+    int steps;                           /* integrator steps (co-simulation) */
+} csfh_counters_t;
+
+typedef struct {
+    double F_N, F_T, indentation, gap, v_T, indentation_rate;
+    double E_total, E_kinetic, E_gravity, E_flexure, E_contact;
+} csfh_outputs_t;
+
+typedef struct {
+    double time;
+    double x[6];        /* x, y, theta, vx, vy, omega */
+    double der[6];      /* derivative cache for get-by-reference */
+    double u_in[3];     /* F_ext[1], F_ext[2], M_ext */
+    csfh_params_t p;
+    csfh_derived_t d;
+    csfh_discrete_t z;
+    csfh_outputs_t out;
+    csfh_counters_t counters;
+} csfh_model_t;
+
+/* Contact force evaluation at one state (for outputs and the Moreau harness). */
+typedef struct {
+    int touching;           /* gap < 0 and a law is selected */
+    csfh_contact_kin_t kin; /* valid when touching */
+    double rho, rho_dot;    /* indentation and its rate (> 0 approaching) */
+    double F_N, F_T;
+    int status;             /* CSFH_LAW_OK or CSFH_LAW_ESDU_CLAMPED */
+} csfh_contact_eval_t;
+
+/* Status bits of the evaluation functions. */
+#define CSFH_OK 0
+#define CSFH_WARN_ESDU_CLAMPED 1
+#define CSFH_ERR_NONFINITE (-1)
+
+/* Start values of every variable (the `paper` preset) from the generated table. */
+void csfh_model_set_defaults(csfh_model_t *m);
+
+/* Table access. */
+const csfh_variable_t *csfh_variable_by_vr(unsigned int vr);
+const csfh_variable_t *csfh_variable_by_name(const char *name);
+double *csfh_variable_real(csfh_model_t *m, const csfh_variable_t *v);
+int *csfh_variable_int(csfh_model_t *m, const csfh_variable_t *v);
+
+/* Check one value against the variable's range and finiteness. Returns 0 if valid, else writes
+ * a message naming the variable and the value. */
+int csfh_check_value(const csfh_variable_t *v, double value, char *msg, size_t msg_size);
+
+/* Validate every parameter (ranges, finiteness, cross-checks such as R1 < R2 and v0 < v1) and
+ * compute the derived quantities. Returns 0 on success, -1 with a message otherwise (the derived
+ * quantities are then left unchanged). */
+int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size);
+
+/* Set the discrete contact state from the initial continuous state (end of initialization). */
+void csfh_model_init_discrete(csfh_model_t *m);
+
+/* Smooth generalized forces at q: gravity + inputs + flexure (if enabled). */
+void csfh_model_smooth_forces(csfh_model_t *m, const double q[3], double Q[3]);
+
+/* Compliant contact force at (q, u) with the current discrete state. */
+void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
+                        csfh_contact_eval_t *c);
+
+/* xdot = f(x) with the current inputs and discrete state. Returns CSFH_OK,
+ * CSFH_WARN_ESDU_CLAMPED, or CSFH_ERR_NONFINITE if any derivative is not finite. */
+int csfh_model_derivatives(csfh_model_t *m, const double x[6], double xdot[6]);
+
+/* Event indicator of the contact: the gap, offset by the hysteresis so that it never sits at 0
+ * right after an event (1 when the contact law is none: no events). */
+double csfh_model_event_indicator(const csfh_model_t *m, const double x[6]);
+
+/* Contact mode update at an event, from m->x. Returns 0 (no change), 1 (onset: the indentation
+ * rate is captured) or 2 (release). */
+int csfh_model_event_update(csfh_model_t *m);
+
+/* Fill m->out (forces, gap, energies) at the current state. */
+int csfh_model_outputs(csfh_model_t *m);
+
+#endif

@@ -1,0 +1,188 @@
+#include "csfh_normal_law.h"
+
+#include <math.h>
+
+#include "csfh_common.h"
+
+double csfh_sigma(double E, double nu, int with_pi)
+{
+    return (1.0 - nu * nu) / (with_pi ? CSFH_PI * E : E); /* Eq. (15) */
+}
+
+double csfh_stiffness_spheres(double E1, double nu1, double E2, double nu2, double R1, double R2,
+                              int internal)
+{
+    const double sum = csfh_sigma(E1, nu1, 0) + csfh_sigma(E2, nu2, 0);
+    const double R_eff = internal ? R1 * R2 / (R2 - R1) : R1 * R2 / (R1 + R2);
+    return 4.0 / (3.0 * sum) * sqrt(R_eff); /* Eq. (14) */
+}
+
+double csfh_stiffness_cylinders(double E1, double nu1, double E2, double nu2, double L)
+{
+    const double E_star = 1.0 / (csfh_sigma(E1, nu1, 0) + csfh_sigma(E2, nu2, 0)); /* Eq. (17) */
+    return 0.25 * CSFH_PI * E_star * L;                                            /* Eq. (16) */
+}
+
+double csfh_damping_factor(csfh_contact_law_t law, double cr)
+{
+    switch (law) {
+    case CSFH_CONTACTLAW_LN_SPHERES:
+    case CSFH_CONTACTLAW_LN_CYLINDERS:
+    case CSFH_CONTACTLAW_LN_ESDU:
+        return 0.75 * (1.0 - cr * cr); /* Eq. (22) */
+    case CSFH_CONTACTLAW_HUNTCROSSLEY:
+        return 1.5 * (1.0 - cr); /* Eq. (21) */
+    case CSFH_CONTACTLAW_FLORES:
+        return 8.0 * (1.0 - cr) / (5.0 * cr); /* Eq. (23) */
+    case CSFH_CONTACTLAW_NONE:
+    default:
+        return 0.0;
+    }
+}
+
+void csfh_esdu_setup(double E1, double nu1, double E2, double nu2, double L, double dR,
+                     int with_pi, csfh_esdu_t *esdu)
+{
+    const double sum = csfh_sigma(E1, nu1, with_pi) + csfh_sigma(E2, nu2, with_pi);
+    esdu->a = sum / L;
+    esdu->F_max = 4.0 * L * dR / sum;
+}
+
+double csfh_esdu_indentation(const csfh_esdu_t *esdu, double F)
+{
+    if (F <= 0.0) {
+        return 0.0;
+    }
+    return esdu->a * F * (log(esdu->F_max / F) + 1.0); /* Eq. (18) */
+}
+
+int csfh_esdu_force(const csfh_esdu_t *esdu, double rho, double *F)
+{
+    if (!(rho > 0.0)) {
+        *F = 0.0;
+        return CSFH_LAW_OK;
+    }
+    /* With u = ln(F/F*) <= 0 and r = rho/(a F*) = rho/(4 dR), Eq. (18) reads
+     * f(u) = ln(1 - u) + u - ln r = 0, increasing in u, f(0) = -ln r. */
+    const double ln_r = log(rho) - log(esdu->a * esdu->F_max);
+    if (ln_r >= 0.0) {
+        *F = esdu->F_max;
+        return CSFH_LAW_ESDU_CLAMPED;
+    }
+    double lo = 2.0 * ln_r - 10.0, hi = 0.0; /* f(lo) < 0 < f(hi) */
+    double u = ln_r - log(1.0 - ln_r);      /* one fixed-point step from u = ln r */
+    for (int it = 0; it < 200; it++) {
+        const double f = log1p(-u) + u - ln_r;
+        if (f < 0.0) {
+            lo = u;
+        } else {
+            hi = u;
+        }
+        const double df = -u / (1.0 - u);
+        double next = (df > 0.0) ? u - f / df : 0.5 * (lo + hi);
+        if (!(next > lo && next < hi)) {
+            next = 0.5 * (lo + hi); /* Newton left the bracket: bisect */
+        }
+        const double step = fabs(next - u);
+        u = next;
+        if (step <= 1e-15 * (1.0 + fabs(u)) || hi - lo <= 1e-15 * (1.0 + fabs(u))) {
+            break;
+        }
+    }
+    *F = esdu->F_max * exp(u);
+    return CSFH_LAW_OK;
+}
+
+double csfh_esdu_tangent_stiffness(const csfh_esdu_t *esdu, double F)
+{
+    /* d rho/dF = a ln(F_max/F) (PHYSICS.md 4.5) */
+    return 1.0 / (esdu->a * log(esdu->F_max / F));
+}
+
+int csfh_normal_elastic_force(const csfh_normal_law_t *law, double rho, double *F_el)
+{
+    if (law->law != CSFH_CONTACTLAW_LN_ESDU) {
+        *F_el = law->K * pow(rho, law->n); /* Eq. (13) */
+        return CSFH_LAW_OK;
+    }
+    double F_esdu;
+    const int status = csfh_esdu_force(&law->esdu, rho, &F_esdu);
+    if (law->esdu_reading == CSFH_ESDUREADING_I2) {
+        *F_el = F_esdu; /* reading I2 (PHYSICS.md 4.6) */
+    } else {
+        /* reading I3: tangent stiffness used as K in K rho^n (PHYSICS.md 4.6) */
+        const double K_t = status == CSFH_LAW_OK && F_esdu > 0.0
+                               ? csfh_esdu_tangent_stiffness(&law->esdu, F_esdu)
+                               : csfh_esdu_tangent_stiffness(&law->esdu, 0.5 * law->esdu.F_max);
+        *F_el = K_t * pow(rho, law->n);
+    }
+    return status;
+}
+
+int csfh_normal_force(const csfh_normal_law_t *law, double rho, double rho_dot,
+                      double rho_dot_onset, double *F_N)
+{
+    if (!(rho > 0.0) || law->law == CSFH_CONTACTLAW_NONE) {
+        *F_N = 0.0;
+        return CSFH_LAW_OK;
+    }
+    double F_el;
+    const int status = csfh_normal_elastic_force(law, rho, &F_el);
+    const double onset = rho_dot_onset > law->v_min ? rho_dot_onset : law->v_min; /* 5.2 */
+    const double F = F_el * (1.0 + law->xi * rho_dot / onset); /* Eqs. (21)-(23) */
+    *F_N = F > 0.0 ? F : 0.0; /* no adhesion */
+    return status;
+}
+
+/* Gauss-Legendre nodes and weights on [-1, 1] (Newton on the Legendre polynomial). */
+static void gauss_legendre(int n, double *x, double *w)
+{
+    for (int i = 0; i < (n + 1) / 2; i++) {
+        double z = cos(CSFH_PI * (i + 0.75) / (n + 0.5)), dp = 1.0;
+        for (int it = 0; it < 100; it++) {
+            double p0 = 1.0, p1 = z;
+            for (int k = 2; k <= n; k++) {
+                const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n * (z * p1 - p0) / (z * z - 1.0);
+            const double dz = p1 / dp;
+            z -= dz;
+            if (fabs(dz) < 1e-16) {
+                break;
+            }
+        }
+        x[i] = -z;
+        x[n - 1 - i] = z;
+        w[i] = w[n - 1 - i] = 2.0 / ((1.0 - z * z) * dp * dp);
+    }
+}
+
+double csfh_normal_elastic_energy(const csfh_normal_law_t *law, double rho)
+{
+    if (!(rho > 0.0) || law->law == CSFH_CONTACTLAW_NONE) {
+        return 0.0;
+    }
+    if (law->law != CSFH_CONTACTLAW_LN_ESDU) {
+        return law->K * pow(rho, law->n + 1.0) / (law->n + 1.0);
+    }
+    if (law->esdu_reading == CSFH_ESDUREADING_I2) {
+        /* closed form: U = a F^2 [ln(F_max/F)/2 + 1/4] (dU/drho = F with rho(F) of Eq. 18) */
+        double F;
+        csfh_esdu_force(&law->esdu, rho, &F);
+        return law->esdu.a * F * F * (0.5 * log(law->esdu.F_max / F) + 0.25);
+    }
+    /* I3: integral of K_t(s) s^n over [0, rho], Gauss-Legendre in s = rho x^2 (smooths the
+     * logarithmic behaviour of K_t at s -> 0) */
+    enum { NQ = 24 };
+    double xg[NQ], wg[NQ], sum = 0.0;
+    gauss_legendre(NQ, xg, wg);
+    for (int i = 0; i < NQ; i++) {
+        const double x = 0.5 * (xg[i] + 1.0); /* x in (0, 1), ds = 2 rho x dx */
+        double F_el;
+        csfh_normal_elastic_force(law, rho * x * x, &F_el);
+        sum += 0.5 * wg[i] * F_el * 2.0 * rho * x;
+    }
+    return sum;
+}

@@ -1,0 +1,47 @@
+/* Description of one interface variable: the generated table csfh_variables[] (from
+ * modelDescription/variables.toml) is an array of these. Pure data, no FMI types: the FMI glue,
+ * the core library's by-name API and the Python harness all read the same table. */
+#ifndef CSFH_VARTABLE_H
+#define CSFH_VARTABLE_H
+
+#include <stddef.h>
+
+typedef enum {
+    CSFH_TYPE_REAL,
+    CSFH_TYPE_INTEGER,
+    CSFH_TYPE_BOOLEAN,
+    CSFH_TYPE_ENUMERATION
+} csfh_type_t;
+
+typedef enum {
+    CSFH_CAUS_PARAMETER,
+    CSFH_CAUS_CALCULATED_PARAMETER,
+    CSFH_CAUS_INPUT,
+    CSFH_CAUS_OUTPUT,
+    CSFH_CAUS_LOCAL,
+    CSFH_CAUS_INDEPENDENT
+} csfh_causality_t;
+
+typedef enum {
+    CSFH_STORE_PLAIN,   /* stored in csfh_model_t, read and written directly */
+    CSFH_STORE_COMPUTED /* output or derivative: recomputed on demand before it is read */
+} csfh_storage_t;
+
+typedef struct {
+    unsigned int vr;
+    const char *name;
+    csfh_type_t type;        /* Real: double storage; Integer/Boolean/Enumeration: int storage */
+    csfh_causality_t causality;
+    int tunable;             /* variability == tunable */
+    int is_state;
+    csfh_storage_t storage;
+    size_t offset;           /* offset of the value inside csfh_model_t */
+    int has_start;
+    double start;
+    int has_range;           /* value must lie in lo..hi (open or closed ends) */
+    double lo, hi;
+    int lo_open, hi_open;
+    double nominal;          /* nominal value (1 when none is declared) */
+} csfh_variable_t;
+
+#endif

@@ -1,0 +1,388 @@
+#!/usr/bin/env python3
+"""Generate modelDescription.xml and the C variable table from variables.toml.
+
+variables.toml is the single source of truth of the FMU interface: value references, names,
+types, start values, ranges, units and the C storage of every variable. This script writes
+
+    <outdir>/modelDescription.xml
+    <outdir>/csfh_variables.h    (value references, enumerations, GUID)
+    <outdir>/csfh_variables.c    (the table the FMI glue and the core library use)
+
+Usage: generate.py VARIABLES_TOML OUTDIR
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import math
+import re
+import sys
+import tomllib
+import uuid
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+CAUSALITY_C = {
+    "parameter": "CSFH_CAUS_PARAMETER",
+    "calculatedParameter": "CSFH_CAUS_CALCULATED_PARAMETER",
+    "input": "CSFH_CAUS_INPUT",
+    "output": "CSFH_CAUS_OUTPUT",
+    "local": "CSFH_CAUS_LOCAL",
+    "independent": "CSFH_CAUS_INDEPENDENT",
+}
+TYPE_C = {
+    "Real": "CSFH_TYPE_REAL",
+    "Integer": "CSFH_TYPE_INTEGER",
+    "Boolean": "CSFH_TYPE_BOOLEAN",
+    "Enumeration": "CSFH_TYPE_ENUMERATION",
+}
+STATES_DEFAULT = "states"
+
+
+class SpecError(Exception):
+    pass
+
+
+def c_ident(name: str) -> str:
+    """body1.x -> BODY1_X, der(body1.x) -> DER_BODY1_X, F_ext[1] -> F_EXT_1."""
+    s = re.sub(r"[^0-9A-Za-z]+", "_", name).strip("_")
+    return s.upper()
+
+
+def parse_range(text: str) -> tuple[float, float, bool, bool]:
+    m = re.fullmatch(r"\s*([\[(])\s*([^,]+?)\s*,\s*([^,]+?)\s*([\])])\s*", text)
+    if not m:
+        raise SpecError(f"bad range {text!r}")
+    lo = float(m.group(2)) if m.group(2) not in ("-inf",) else -math.inf
+    hi = float(m.group(3)) if m.group(3) not in ("inf",) else math.inf
+    return lo, hi, m.group(1) == "(", m.group(4) == ")"
+
+
+def fmt_real(x: float) -> str:
+    if math.isinf(x):
+        return "INFINITY" if x > 0 else "-INFINITY"
+    return repr(float(x))
+
+
+def fmt_xml_real(x: float) -> str:
+    return repr(float(x))
+
+
+def load(path: Path) -> dict:
+    with path.open("rb") as f:
+        spec = tomllib.load(f)
+    variables = spec["variables"]
+    seen_vr: dict[tuple[str, int], str] = {}
+    seen_name: set[str] = set()
+    enums = {e["name"]: e for e in spec.get("enumerations", [])}
+    units = {u["name"]: u for u in spec.get("units", [])}
+    for v in variables:
+        name = v["name"]
+        if name in seen_name:
+            raise SpecError(f"duplicate variable name {name}")
+        seen_name.add(name)
+        # FMI 2.0 value references are unique per base type; we keep them unique overall
+        key = ("all", v["vr"])
+        if key in seen_vr:
+            raise SpecError(f"value reference {v['vr']} of {name} already used by {seen_vr[key]}")
+        seen_vr[key] = name
+        if v["type"] == "Enumeration" and v.get("declaredType") not in enums:
+            raise SpecError(f"{name}: unknown declaredType {v.get('declaredType')}")
+        if "unit" in v and v["unit"] not in units:
+            raise SpecError(f"{name}: unit {v['unit']} not declared")
+        if "range" in v:
+            parse_range(v["range"])
+    for e in enums.values():
+        values = [it["value"] for it in e["items"]]
+        if values != list(range(1, len(values) + 1)):
+            raise SpecError(f"enumeration {e['name']} must be numbered 1..N in order")
+    by_name = {v["name"]: v for v in variables}
+    for v in variables:
+        if "derivative_of" in v and not by_name.get(v["derivative_of"], {}).get("state"):
+            raise SpecError(f"{v['name']}: derivative_of must name a state")
+        for d in v.get("depends", []):
+            if d not in by_name:
+                raise SpecError(f"{v['name']}: depends on unknown variable {d}")
+    return spec
+
+
+def guid_of(spec: dict) -> str:
+    digest = hashlib.sha256(repr(spec).encode()).hexdigest()
+    return "{" + str(uuid.UUID(digest[:32])) + "}"
+
+
+# --------------------------------------------------------------------------------------------
+# modelDescription.xml
+
+
+def xml_model_description(spec: dict, guid: str) -> str:
+    model = spec["model"]
+    variables = spec["variables"]
+    index = {v["name"]: i + 1 for i, v in enumerate(variables)}
+    states = [v["name"] for v in variables if v.get("state")]
+    inputs = [v["name"] for v in variables if v["causality"] == "input"]
+    parameters = [v["name"] for v in variables if v["causality"] == "parameter"]
+    out: list[str] = []
+    w = out.append
+    w('<?xml version="1.0" encoding="UTF-8"?>')
+    w(
+        f'<fmiModelDescription fmiVersion="2.0" modelName={quoteattr(model["modelName"])} '
+        f'guid="{guid}" description={quoteattr(model["description"])} '
+        f"author={quoteattr(model['author'])} version={quoteattr(model['version'])} "
+        f'generationTool="csfh modelDescription/generate.py" '
+        f'variableNamingConvention="structured" '
+        f'numberOfEventIndicators="{model["numberOfEventIndicators"]}">'
+    )
+    mi = model["modelIdentifier"]
+    w(
+        f'  <ModelExchange modelIdentifier="{mi}" canGetAndSetFMUstate="true" '
+        f'canSerializeFMUstate="true" canNotUseMemoryManagementFunctions="true" '
+        f'completedIntegratorStepNotNeeded="true"/>'
+    )
+    if "cosimulation" in spec:
+        cs = spec["cosimulation"]
+        attrs = " ".join(f'{k}="{str(v).lower()}"' for k, v in cs.items())
+        w(f'  <CoSimulation modelIdentifier="{mi}" {attrs}/>')
+    w("  <UnitDefinitions>")
+    for u in spec["units"]:
+        base = {k: u[k] for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad") if k in u}
+        displays = u.get("display", [])
+        if not base and not displays:
+            w(f"    <Unit name={quoteattr(u['name'])}/>")
+            continue
+        w(f"    <Unit name={quoteattr(u['name'])}>")
+        if base or u["name"] == "1":
+            w("      <BaseUnit " + " ".join(f'{k}="{val}"' for k, val in base.items()) + "/>")
+        for d in displays:
+            w(f'      <DisplayUnit name={quoteattr(d["name"])} factor="{d["factor"]!r}"/>')
+        w("    </Unit>")
+    w("  </UnitDefinitions>")
+    w("  <TypeDefinitions>")
+    for e in spec.get("enumerations", []):
+        w(f"    <SimpleType name={quoteattr(e['name'])} description={quoteattr(e['description'])}>")
+        w("      <Enumeration>")
+        for it in e["items"]:
+            w(
+                f'        <Item name={quoteattr(it["name"])} value="{it["value"]}" '
+                f"description={quoteattr(it['description'])}/>"
+            )
+        w("      </Enumeration>")
+        w("    </SimpleType>")
+    w("  </TypeDefinitions>")
+    w("  <LogCategories>")
+    w('    <Category name="logEvents" description="Contact onsets and releases, mode changes"/>')
+    w('    <Category name="logStatusWarning" description="Calls that return fmi2Warning"/>')
+    w(
+        '    <Category name="logStatusError" '
+        'description="Calls that return fmi2Error: bad input, illegal call sequences"/>'
+    )
+    w('    <Category name="logAll" description="Every FMI call"/>')
+    w("  </LogCategories>")
+    w('  <DefaultExperiment startTime="0" stopTime="1" tolerance="1e-06"/>')
+    w("  <ModelVariables>")
+    for i, v in enumerate(variables, start=1):
+        attrs = [f"name={quoteattr(v['name'])}", f'valueReference="{v["vr"]}"']
+        if "description" in v:
+            attrs.append(f"description={quoteattr(v['description'])}")
+        attrs.append(f'causality="{v["causality"]}"')
+        attrs.append(f'variability="{v["variability"]}"')
+        if "initial" in v:
+            attrs.append(f'initial="{v["initial"]}"')
+        w(f"    <!-- index {i} -->")
+        w("    <ScalarVariable " + " ".join(attrs) + ">")
+        ta: list[str] = []
+        if v["type"] == "Enumeration":
+            ta.append(f'declaredType="{v["declaredType"]}"')
+        for key in ("unit", "displayUnit"):
+            if key in v:
+                ta.append(f"{key}={quoteattr(v[key])}")
+        if "range" in v:
+            lo, hi, _, _ = parse_range(v["range"])
+            if math.isfinite(lo):
+                ta.append(f'min="{fmt_xml_real(lo)}"')
+            if math.isfinite(hi):
+                ta.append(f'max="{fmt_xml_real(hi)}"')
+        if "nominal" in v:
+            ta.append(f'nominal="{fmt_xml_real(v["nominal"])}"')
+        if "derivative_of" in v:
+            ta.append(f'derivative="{index[v["derivative_of"]]}"')
+        if "start" in v:
+            s = v["start"]
+            if v["type"] == "Boolean":
+                ta.append(f'start="{"true" if s else "false"}"')
+            elif v["type"] == "Real":
+                ta.append(f'start="{fmt_xml_real(s)}"')
+            else:
+                ta.append(f'start="{int(s)}"')
+        w(f"      <{v['type']} " + " ".join(ta) + "/>")
+        w("    </ScalarVariable>")
+    w("  </ModelVariables>")
+
+    def deps_of(v: dict) -> list[str]:
+        d = v.get("depends", STATES_DEFAULT)
+        return states if d == STATES_DEFAULT else list(d)
+
+    def dep_attr(names: list[str]) -> str:
+        return " ".join(str(index[n]) for n in sorted(set(names), key=lambda n: index[n]))
+
+    w("  <ModelStructure>")
+    w("    <Outputs>")
+    for v in variables:
+        if v["causality"] == "output":
+            w(f'      <Unknown index="{index[v["name"]]}" dependencies="{dep_attr(deps_of(v))}"/>')
+    w("    </Outputs>")
+    w("    <Derivatives>")
+    for v in variables:
+        if "derivative_of" in v:
+            w(f'      <Unknown index="{index[v["name"]]}" dependencies="{dep_attr(deps_of(v))}"/>')
+    w("    </Derivatives>")
+    w("    <InitialUnknowns>")
+    initial_unknowns = []
+    for v in variables:
+        calculated_output = (
+            v["causality"] == "output"
+            and v.get("initial") in (None, "calculated")
+            and "start" not in v
+        )
+        if calculated_output or v["causality"] == "calculatedParameter" or "derivative_of" in v:
+            initial_unknowns.append(v)
+    for v in sorted(initial_unknowns, key=lambda v: index[v["name"]]):
+        if v["causality"] == "calculatedParameter":
+            names = parameters
+        elif (
+            "derivative_of" in v
+            and v.get("depends")
+            and all(n in states for n in v["depends"])
+            and len(v["depends"]) == 1
+        ):
+            names = deps_of(v)  # der(q) = u: no parameter enters
+        else:
+            names = (
+                [n for n in deps_of(v) if n not in inputs]
+                + parameters
+                + [n for n in deps_of(v) if n in inputs]
+            )
+        w(f'      <Unknown index="{index[v["name"]]}" dependencies="{dep_attr(names)}"/>')
+    w("    </InitialUnknowns>")
+    w("  </ModelStructure>")
+    w("</fmiModelDescription>")
+    return "\n".join(out) + "\n"
+
+
+# --------------------------------------------------------------------------------------------
+# C
+
+
+def c_header(spec: dict, guid: str) -> str:
+    out: list[str] = []
+    w = out.append
+    w("/* Generated by modelDescription/generate.py from variables.toml. Do not edit. */")
+    w("#ifndef CSFH_VARIABLES_H")
+    w("#define CSFH_VARIABLES_H")
+    w("")
+    w('#include "csfh_vartable.h"')
+    w("")
+    w(f'#define CSFH_GUID "{guid}"')
+    w(f'#define CSFH_MODEL_IDENTIFIER "{spec["model"]["modelIdentifier"]}"')
+    w(f"#define CSFH_NUMBER_OF_STATES {sum(1 for v in spec['variables'] if v.get('state'))}")
+    w(f"#define CSFH_NUMBER_OF_EVENT_INDICATORS {spec['model']['numberOfEventIndicators']}")
+    w(f"#define CSFH_NUMBER_OF_VARIABLES {len(spec['variables'])}")
+    w("")
+    w("/* value references */")
+    for v in spec["variables"]:
+        w(f"#define CSFH_VR_{c_ident(v['name'])} {v['vr']}u")
+    w("")
+    w("extern const csfh_variable_t csfh_variables[CSFH_NUMBER_OF_VARIABLES];")
+    w("")
+    w("#endif")
+    return "\n".join(out) + "\n"
+
+
+def c_enums(spec: dict) -> str:
+    out: list[str] = []
+    w = out.append
+    w("/* Generated by modelDescription/generate.py from variables.toml. Do not edit. */")
+    w("#ifndef CSFH_ENUMS_H")
+    w("#define CSFH_ENUMS_H")
+    for e in spec.get("enumerations", []):
+        w("")
+        w(f"/* {e['description']} */")
+        w("typedef enum {")
+        for it in e["items"]:
+            item = f"CSFH_{c_ident(e['name'])}_{c_ident(it['name'])}"
+            w(f"    {item} = {it['value']}, /* {it['description']} */")
+        w(f"}} csfh_{re.sub(r'(?<!^)(?=[A-Z])', '_', e['name']).lower()}_t;")
+        w(f"#define CSFH_{c_ident(e['name'])}_COUNT {len(e['items'])}")
+    w("")
+    w("#endif")
+    return "\n".join(out) + "\n"
+
+
+def c_source(spec: dict) -> str:
+    enums = {e["name"]: e for e in spec.get("enumerations", [])}
+    out: list[str] = []
+    w = out.append
+    w("/* Generated by modelDescription/generate.py from variables.toml. Do not edit. */")
+    w("#include <math.h>")
+    w("#include <stddef.h>")
+    w('#include "csfh_model.h"')
+    w('#include "csfh_variables.h"')
+    w("")
+    w("const csfh_variable_t csfh_variables[CSFH_NUMBER_OF_VARIABLES] = {")
+    for v in spec["variables"]:
+        field = v["field"]
+        lo, hi, lo_open, hi_open, has_range = -math.inf, math.inf, 0, 0, 0
+        if "range" in v:
+            lo, hi, lo_open, hi_open = parse_range(v["range"])
+            has_range = 1
+        if v["type"] == "Enumeration":
+            lo, hi, lo_open, hi_open, has_range = 1, len(enums[v["declaredType"]]["items"]), 0, 0, 1
+        if v["type"] == "Boolean":
+            lo, hi, has_range = 0, 1, 1
+        start = v.get("start", 0)
+        if isinstance(start, bool):
+            start = int(start)
+        storage = (
+            "CSFH_STORE_COMPUTED" if field.startswith(("out.", "der[")) else "CSFH_STORE_PLAIN"
+        )
+        w(
+            "    {"
+            f'{v["vr"]}u, "{v["name"]}", {TYPE_C[v["type"]]}, {CAUSALITY_C[v["causality"]]}, '
+            f"{int(v['variability'] == 'tunable')}, {int(bool(v.get('state')))}, {storage}, "
+            f"offsetof(csfh_model_t, {field}), {1 if 'start' in v else 0}, {fmt_real(start)}, "
+            f"{has_range}, {fmt_real(lo)}, {fmt_real(hi)}, {int(lo_open)}, {int(hi_open)}, "
+            f"{fmt_real(v.get('nominal', 1.0))}"
+            "},"
+        )
+    w("};")
+    return "\n".join(out) + "\n"
+
+
+def main(argv: list[str]) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("variables", type=Path)
+    ap.add_argument("outdir", type=Path)
+    args = ap.parse_args(argv)
+    try:
+        spec = load(args.variables)
+    except (SpecError, KeyError, tomllib.TOMLDecodeError) as exc:
+        print(f"generate.py: {args.variables}: {exc}", file=sys.stderr)
+        return 1
+    guid = guid_of(spec)
+    args.outdir.mkdir(parents=True, exist_ok=True)
+    files = {
+        "modelDescription.xml": xml_model_description(spec, guid),
+        "csfh_variables.h": c_header(spec, guid),
+        "csfh_enums.h": c_enums(spec),
+        "csfh_variables.c": c_source(spec),
+    }
+    for name, text in files.items():
+        path = args.outdir / name
+        if not path.exists() or path.read_text() != text:
+            path.write_text(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,5 @@
+"""python -m csfh: the csfh command line."""
+
+from .cli import main
+
+raise SystemExit(main())

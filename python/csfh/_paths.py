@@ -1,0 +1,24 @@
+"""Where the built artefacts are: inside the installed package, or in a source build tree."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+_PACKAGE_DIR = Path(__file__).resolve().parent
+_SOURCE_ROOT = _PACKAGE_DIR.parents[1]
+
+
+def fmu_path() -> Path:
+    """Path of csfh.fmu: $CSFH_FMU, the copy inside the package, or build/csfh.fmu."""
+    candidates = []
+    if os.environ.get("CSFH_FMU"):
+        candidates.append(Path(os.environ["CSFH_FMU"]))
+    candidates += [_PACKAGE_DIR / "csfh.fmu", _SOURCE_ROOT / "build" / "csfh.fmu"]
+    for path in candidates:
+        if path.exists():
+            return path
+    raise FileNotFoundError(
+        "csfh.fmu not found: install the package (pip install .) or build it "
+        "(cmake -S . -B build && cmake --build build)"
+    )
