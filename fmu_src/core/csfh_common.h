@@ -10,4 +10,12 @@ static inline double csfh_cross2(const double a[2], const double b[2])
     return a[0] * b[1] - a[1] * b[0];
 }
 
+/* Saturating evaluation counter. */
+static inline void csfh_count(int *counter)
+{
+    if (*counter < 0x7fffffff) {
+        (*counter)++;
+    }
+}
+
 #endif

@@ -1,19 +1,13 @@
 #include "csfh_model.h"
 
-#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "csfh_common.h"
 #include "csfh_friction.h"
 #include "csfh_variables.h"
 
-static void count(int *counter)
-{
-    if (*counter < INT_MAX) {
-        (*counter)++;
-    }
-}
 
 const csfh_variable_t *csfh_variable_by_vr(unsigned int vr)
 {
@@ -181,7 +175,7 @@ void csfh_model_smooth_forces(csfh_model_t *m, const double q[3], double Q[3])
     Q[2] = m->u_in[2];
     if (m->p.flexure_enabled) {
         double Qe[3];
-        count(&m->counters.flexure);
+        csfh_count(&m->counters.flexure);
         csfh_flexure_force(&m->d.flexure, q, Qe);
         Q[0] += Qe[0];
         Q[1] += Qe[1];
@@ -199,7 +193,7 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
     if (m->p.law == CSFH_CONTACTLAW_NONE) {
         return;
     }
-    count(&m->counters.contact);
+    csfh_count(&m->counters.contact);
     const double gap = csfh_contact_gap(m->d.delta, m->p.s1bar, q);
     if (!(gap < 0.0)) {
         return;
@@ -213,7 +207,7 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
     const double onset = m->z.in_contact ? m->z.onset_speed : c->rho_dot;
     c->status = csfh_normal_force(&m->d.normal, c->rho, c->rho_dot, onset, &c->F_N);
     if (m->p.friction_enabled && c->F_N > 0.0) {
-        count(&m->counters.friction);
+        csfh_count(&m->counters.friction);
         const double v_T = c->kin.DT[0] * u[0] + c->kin.DT[1] * u[1] + c->kin.DT[2] * u[2];
         c->F_T = csfh_ambrosio_force(m->p.fd, m->p.v0, m->p.v1, c->F_N, v_T);
     }
@@ -221,7 +215,7 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
 
 int csfh_model_derivatives(csfh_model_t *m, const double x[6], double xdot[6])
 {
-    count(&m->counters.rhs);
+    csfh_count(&m->counters.rhs);
     double Q[3];
     csfh_model_smooth_forces(m, x, Q);
     csfh_contact_eval_t c;
@@ -270,7 +264,7 @@ int csfh_model_event_update(csfh_model_t *m)
     const double eps = m->p.gap_hysteresis;
     if (!m->z.in_contact && gap <= eps) {
         m->z.in_contact = 1;
-        count(&m->z.contact_count);
+        csfh_count(&m->z.contact_count);
         m->z.onset_speed = indentation_rate(m); /* pre-impact rate, used until release */
         return 1;
     }
@@ -315,7 +309,7 @@ int csfh_model_outputs(csfh_model_t *m)
     o->E_flexure = 0.0;
     if (m->p.flexure_enabled) {
         double Qe[3];
-        count(&m->counters.flexure);
+        csfh_count(&m->counters.flexure);
         o->E_flexure = csfh_flexure_force(&m->d.flexure, x, Qe);
     }
     o->E_contact = c.touching ? csfh_normal_elastic_energy(&m->d.normal, c.rho) : 0.0;

@@ -643,6 +643,7 @@ typedef struct {
     unsigned int version;
     unsigned int size;
     char guid[40];
+    fmi2Type type;
     fmu_state_t state;
     int prepared;
     int warned_esdu;
@@ -656,6 +657,7 @@ static void snapshot_take(const fmu_instance_t *inst, fmu_snapshot_t *s)
     s->version = FMU_STATE_VERSION;
     s->size = (unsigned int)sizeof(*s);
     strncpy(s->guid, CSFH_GUID, sizeof(s->guid) - 1);
+    s->type = inst->type;
     s->state = inst->state;
     s->prepared = inst->prepared;
     s->warned_esdu = inst->warned_esdu;
@@ -666,6 +668,24 @@ static int snapshot_valid(const fmu_snapshot_t *s)
 {
     return s->magic == FMU_STATE_MAGIC && s->version == FMU_STATE_VERSION &&
            s->size == sizeof(*s) && strncmp(s->guid, CSFH_GUID, sizeof(s->guid)) == 0;
+}
+
+/* A state can only be restored into an instance of the same kind (ME or CS). */
+static int snapshot_fits(const fmu_instance_t *inst, const fmu_snapshot_t *s, const char *function)
+{
+    if (!snapshot_valid(s)) {
+        fmu_log((fmu_instance_t *)inst, fmi2Error, LOG_STATUS_ERROR,
+                "%s: the given FMUstate was not made by this FMU", function);
+        return 0;
+    }
+    if (s->type != inst->type) {
+        fmu_log((fmu_instance_t *)inst, fmi2Error, LOG_STATUS_ERROR,
+                "%s: the FMUstate was made by a %s instance, this one is %s", function,
+                s->type == fmi2ModelExchange ? "model-exchange" : "co-simulation",
+                inst->type == fmi2ModelExchange ? "model-exchange" : "co-simulation");
+        return 0;
+    }
+    return 1;
 }
 
 static void snapshot_restore(fmu_instance_t *inst, const fmu_snapshot_t *s)
@@ -718,8 +738,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
         return fmi2Error;
     }
     const fmu_snapshot_t *s = (const fmu_snapshot_t *)FMUstate;
-    if (!snapshot_valid(s)) {
-        LOG_ERROR(inst, "fmi2SetFMUstate: the given FMUstate was not made by this FMU");
+    if (!snapshot_fits(inst, s, "fmi2SetFMUstate")) {
         return fmi2Error;
     }
     snapshot_restore(inst, s);
