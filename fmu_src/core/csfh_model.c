@@ -2,12 +2,25 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "csfh_common.h"
 #include "csfh_friction.h"
 #include "csfh_variables.h"
 
+
+/* Shortest "%g" text that reads back as the same double (0.3, not 0.29999999999999999). */
+static const char *fmt_value(char buf[32], double value)
+{
+    for (int precision = 6; precision <= 17; precision++) {
+        snprintf(buf, 32, "%.*g", precision, value);
+        if (strtod(buf, NULL) == value) {
+            break;
+        }
+    }
+    return buf;
+}
 
 const csfh_variable_t *csfh_variable_by_vr(unsigned int vr)
 {
@@ -76,8 +89,10 @@ int csfh_check_value(const csfh_variable_t *v, double value, char *msg, size_t m
         } else if (v->type == CSFH_TYPE_BOOLEAN) {
             snprintf(msg, msg_size, "%s = %d is not a Boolean (0 or 1)", v->name, (int)value);
         } else {
-            snprintf(msg, msg_size, "%s = %.17g is out of range %c%.17g, %.17g%c", v->name, value,
-                     v->lo_open ? '(' : '[', v->lo, v->hi, v->hi_open ? ')' : ']');
+            char b1[32], b2[32], b3[32];
+            snprintf(msg, msg_size, "%s = %s is out of range %c%s, %s%c", v->name,
+                     fmt_value(b1, value), v->lo_open ? '(' : '[', fmt_value(b2, v->lo),
+                     fmt_value(b3, v->hi), v->hi_open ? ')' : ']');
         }
         return -1;
     }
@@ -109,14 +124,15 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
         return -1;
     }
     /* cross-checks */
+    char b1[32], b2[32];
     if (!(p->R1 < p->R2)) {
-        snprintf(msg, msg_size, "contact.R1 = %.17g must be smaller than contact.R2 = %.17g",
-                 p->R1, p->R2);
+        snprintf(msg, msg_size, "contact.R1 = %s must be smaller than contact.R2 = %s",
+                 fmt_value(b1, p->R1), fmt_value(b2, p->R2));
         return -1;
     }
     if (!(p->v1 > p->v0)) {
-        snprintf(msg, msg_size, "friction.v1 = %.17g must be greater than friction.v0 = %.17g",
-                 p->v1, p->v0);
+        snprintf(msg, msg_size, "friction.v1 = %s must be greater than friction.v0 = %s",
+                 fmt_value(b1, p->v1), fmt_value(b2, p->v0));
         return -1;
     }
     csfh_derived_t d;

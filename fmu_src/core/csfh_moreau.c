@@ -103,6 +103,9 @@ int csfh_moreau_step(csfh_model_t *m, const csfh_moreau_options_t *o, csfh_morea
         info->restitution = info->gamma_A[0] < -o->v_eps;
         const double eps = info->restitution ? m->p.cr : 0.0;
         const double c[2] = {gamma_free[0] + eps * info->gamma_A[0], gamma_free[1]};
+        if (m->p.friction_enabled) {
+            csfh_count(&m->counters.friction);
+        }
         const double fd = m->p.friction_enabled ? m->p.fd : 0.0;
         const double fa = m->p.friction_enabled ? m->p.fa : 0.0;
         double mu_stick = fa; /* paper-literal: f_a decides (6.4) */

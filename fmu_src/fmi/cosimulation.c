@@ -30,7 +30,6 @@ struct csfh_cvode {
     SUNMatrix J;
     SUNLinearSolver LS;
     double tolerance; /* the relative tolerance the solver was set up with */
-    int rhs_status;   /* last model status seen in the right-hand side */
     long counted_steps; /* CVODE steps already added to the model's counter */
 };
 
@@ -40,7 +39,6 @@ static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
     (void)t;
     const int status = csfh_model_derivatives(&inst->model, N_VGetArrayPointer(y),
                                               N_VGetArrayPointer(ydot));
-    inst->cvode->rhs_status = status;
     return status == CSFH_ERR_NONFINITE ? 1 : 0; /* recoverable: CVODE retries a smaller step */
 }
 
@@ -212,7 +210,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
         memcpy(m->x, N_VGetArrayPointer(cv->y), NX * sizeof(double));
         m->time = tret;
         fmu_invalidate(inst);
-        if (cv->rhs_status == CSFH_WARN_ESDU_CLAMPED && !inst->warned_esdu) {
+        if (!inst->warned_esdu && csfh_model_outputs(m) == CSFH_WARN_ESDU_CLAMPED) {
             inst->warned_esdu = 1;
             fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING,
                     "fmi2DoStep: indentation beyond the validity of the ESDU law; the force is "

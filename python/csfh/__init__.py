@@ -1,13 +1,34 @@
 """csfh: dynamics of a Conjugate-Surface Flexure Hinge with impacts and friction.
 
 The model is an FMI 2.0 FMU (model exchange and co-simulation) built from the C core in
-``fmu_src/``; this package ships it and adds scenes, a Moreau time stepper, comparisons and
-reports on top.
+``fmu_src/``; this package ships it, with the same core as a shared library, and adds scenes,
+the Moreau time stepper, comparisons and reports on top.
+
+    >>> import csfh
+    >>> scene = csfh.load_scene("csfh")
+    >>> run = csfh.simulate(scene, "LN_cylinders")      # FMU, model exchange, CVode
+    >>> rigid = csfh.moreau(scene, stick_rule="memory")  # Moreau midpoint stepper
 """
 
 from __future__ import annotations
 
-from ._paths import fmu_path
+from ._paths import core_library_path, fmu_path
+from .compare import compare
+from .moreau import moreau
+from .results import Trajectory
+from .scene import Scene, SceneError, load_scene, scene_from_dict
+from .simulate import simulate
 
-__all__ = ["fmu_path"]
+__all__ = [
+    "Scene",
+    "SceneError",
+    "Trajectory",
+    "compare",
+    "core_library_path",
+    "fmu_path",
+    "load_scene",
+    "moreau",
+    "scene_from_dict",
+    "simulate",
+]
 __version__ = "0.1.0"

@@ -9,16 +9,30 @@ _PACKAGE_DIR = Path(__file__).resolve().parent
 _SOURCE_ROOT = _PACKAGE_DIR.parents[1]
 
 
+def _first_existing(candidates: list[Path], what: str) -> Path:
+    for path in candidates:
+        if path.exists():
+            return path
+    raise FileNotFoundError(
+        f"{what} not found: install the package (pip install .) or build it "
+        "(cmake -S . -B build && cmake --build build)"
+    )
+
+
 def fmu_path() -> Path:
     """Path of csfh.fmu: $CSFH_FMU, the copy inside the package, or build/csfh.fmu."""
     candidates = []
     if os.environ.get("CSFH_FMU"):
         candidates.append(Path(os.environ["CSFH_FMU"]))
     candidates += [_PACKAGE_DIR / "csfh.fmu", _SOURCE_ROOT / "build" / "csfh.fmu"]
-    for path in candidates:
-        if path.exists():
-            return path
-    raise FileNotFoundError(
-        "csfh.fmu not found: install the package (pip install .) or build it "
-        "(cmake -S . -B build && cmake --build build)"
-    )
+    return _first_existing(candidates, "csfh.fmu")
+
+
+def core_library_path() -> Path:
+    """Path of libcsfh_core.so (the physics core for the harness): $CSFH_CORE, the package copy,
+    or build/libcsfh_core.so."""
+    candidates = []
+    if os.environ.get("CSFH_CORE"):
+        candidates.append(Path(os.environ["CSFH_CORE"]))
+    candidates += [_PACKAGE_DIR / "libcsfh_core.so", _SOURCE_ROOT / "build" / "libcsfh_core.so"]
+    return _first_existing(candidates, "libcsfh_core.so")

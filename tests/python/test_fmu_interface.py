@@ -27,24 +27,56 @@ OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
 ME, CS = 0, 1  # fmi2Type
 
 ALL_FMI2_FUNCTIONS = {
-    "fmi2GetTypesPlatform", "fmi2GetVersion", "fmi2SetDebugLogging", "fmi2Instantiate",
-    "fmi2FreeInstance", "fmi2SetupExperiment", "fmi2EnterInitializationMode",
-    "fmi2ExitInitializationMode", "fmi2Terminate", "fmi2Reset", "fmi2GetReal", "fmi2GetInteger",
-    "fmi2GetBoolean", "fmi2GetString", "fmi2SetReal", "fmi2SetInteger", "fmi2SetBoolean",
-    "fmi2SetString", "fmi2GetFMUstate", "fmi2SetFMUstate", "fmi2FreeFMUstate",
-    "fmi2SerializedFMUstateSize", "fmi2SerializeFMUstate", "fmi2DeSerializeFMUstate",
-    "fmi2GetDirectionalDerivative", "fmi2EnterEventMode", "fmi2NewDiscreteStates",
-    "fmi2EnterContinuousTimeMode", "fmi2CompletedIntegratorStep", "fmi2SetTime",
-    "fmi2SetContinuousStates", "fmi2GetDerivatives", "fmi2GetEventIndicators",
-    "fmi2GetContinuousStates", "fmi2GetNominalsOfContinuousStates",
-    "fmi2SetRealInputDerivatives", "fmi2GetRealOutputDerivatives", "fmi2DoStep",
-    "fmi2CancelStep", "fmi2GetStatus", "fmi2GetRealStatus", "fmi2GetIntegerStatus",
-    "fmi2GetBooleanStatus", "fmi2GetStringStatus",
+    "fmi2GetTypesPlatform",
+    "fmi2GetVersion",
+    "fmi2SetDebugLogging",
+    "fmi2Instantiate",
+    "fmi2FreeInstance",
+    "fmi2SetupExperiment",
+    "fmi2EnterInitializationMode",
+    "fmi2ExitInitializationMode",
+    "fmi2Terminate",
+    "fmi2Reset",
+    "fmi2GetReal",
+    "fmi2GetInteger",
+    "fmi2GetBoolean",
+    "fmi2GetString",
+    "fmi2SetReal",
+    "fmi2SetInteger",
+    "fmi2SetBoolean",
+    "fmi2SetString",
+    "fmi2GetFMUstate",
+    "fmi2SetFMUstate",
+    "fmi2FreeFMUstate",
+    "fmi2SerializedFMUstateSize",
+    "fmi2SerializeFMUstate",
+    "fmi2DeSerializeFMUstate",
+    "fmi2GetDirectionalDerivative",
+    "fmi2EnterEventMode",
+    "fmi2NewDiscreteStates",
+    "fmi2EnterContinuousTimeMode",
+    "fmi2CompletedIntegratorStep",
+    "fmi2SetTime",
+    "fmi2SetContinuousStates",
+    "fmi2GetDerivatives",
+    "fmi2GetEventIndicators",
+    "fmi2GetContinuousStates",
+    "fmi2GetNominalsOfContinuousStates",
+    "fmi2SetRealInputDerivatives",
+    "fmi2GetRealOutputDerivatives",
+    "fmi2DoStep",
+    "fmi2CancelStep",
+    "fmi2GetStatus",
+    "fmi2GetRealStatus",
+    "fmi2GetIntegerStatus",
+    "fmi2GetBooleanStatus",
+    "fmi2GetStringStatus",
 }
 
 
 # ------------------------------------------------------------------------------------------
 # helpers
+
 
 def shared_library(unzipped: str) -> Path:
     return Path(unzipped) / "binaries" / "linux64" / "csfh.so"
@@ -112,7 +144,8 @@ def names_value(message: str, name: str, value: float) -> bool:
 def assert_error_names(log: Any, name: str, value: float) -> None:
     errors = log.errors()
     assert any(names_value(m, name, value) for m in errors), (
-        f"no error message names {name} = {value}: {errors}")
+        f"no error message names {name} = {value}: {errors}"
+    )
 
 
 def assert_fmi_error(call: Callable[[], object]) -> FMICallException:
@@ -126,8 +159,11 @@ class Raw:
     """The exported C functions, called directly (NULL arguments, wrong instance types)."""
 
     _SIGNATURES: tuple[tuple[str, Any, tuple[Any, ...]], ...] = (
-        ("fmi2Instantiate", c_void_p,
-         (c_char_p, c_int, c_char_p, c_char_p, POINTER(fmi2CallbackFunctions), c_int, c_int)),
+        (
+            "fmi2Instantiate",
+            c_void_p,
+            (c_char_p, c_int, c_char_p, c_char_p, POINTER(fmi2CallbackFunctions), c_int, c_int),
+        ),
         ("fmi2FreeInstance", None, (c_void_p,)),
         ("fmi2SetDebugLogging", c_int, (c_void_p, c_int, c_size_t, POINTER(c_char_p))),
         ("fmi2SetupExperiment", c_int, (c_void_p, c_int, c_double, c_double, c_int, c_double)),
@@ -148,26 +184,44 @@ class Raw:
         ("fmi2FreeFMUstate", c_int, (c_void_p, POINTER(c_void_p))),
         ("fmi2SerializedFMUstateSize", c_int, (c_void_p, c_void_p, POINTER(c_size_t))),
         ("fmi2SerializeFMUstate", c_int, (c_void_p, c_void_p, POINTER(c_char), c_size_t)),
-        ("fmi2DeSerializeFMUstate", c_int,
-         (c_void_p, POINTER(c_char), c_size_t, POINTER(c_void_p))),
-        ("fmi2GetDirectionalDerivative", c_int,
-         (c_void_p, POINTER(c_uint), c_size_t, POINTER(c_uint), c_size_t, POINTER(c_double),
-          POINTER(c_double))),
+        (
+            "fmi2DeSerializeFMUstate",
+            c_int,
+            (c_void_p, POINTER(c_char), c_size_t, POINTER(c_void_p)),
+        ),
+        (
+            "fmi2GetDirectionalDerivative",
+            c_int,
+            (
+                c_void_p,
+                POINTER(c_uint),
+                c_size_t,
+                POINTER(c_uint),
+                c_size_t,
+                POINTER(c_double),
+                POINTER(c_double),
+            ),
+        ),
         ("fmi2EnterEventMode", c_int, (c_void_p,)),
         ("fmi2NewDiscreteStates", c_int, (c_void_p, POINTER(fmi2EventInfo))),
         ("fmi2EnterContinuousTimeMode", c_int, (c_void_p,)),
-        ("fmi2CompletedIntegratorStep", c_int,
-         (c_void_p, c_int, POINTER(c_int), POINTER(c_int))),
+        ("fmi2CompletedIntegratorStep", c_int, (c_void_p, c_int, POINTER(c_int), POINTER(c_int))),
         ("fmi2SetTime", c_int, (c_void_p, c_double)),
         ("fmi2SetContinuousStates", c_int, (c_void_p, POINTER(c_double), c_size_t)),
         ("fmi2GetDerivatives", c_int, (c_void_p, POINTER(c_double), c_size_t)),
         ("fmi2GetEventIndicators", c_int, (c_void_p, POINTER(c_double), c_size_t)),
         ("fmi2GetContinuousStates", c_int, (c_void_p, POINTER(c_double), c_size_t)),
         ("fmi2GetNominalsOfContinuousStates", c_int, (c_void_p, POINTER(c_double), c_size_t)),
-        ("fmi2SetRealInputDerivatives", c_int,
-         (c_void_p, POINTER(c_uint), c_size_t, POINTER(c_int), POINTER(c_double))),
-        ("fmi2GetRealOutputDerivatives", c_int,
-         (c_void_p, POINTER(c_uint), c_size_t, POINTER(c_int), POINTER(c_double))),
+        (
+            "fmi2SetRealInputDerivatives",
+            c_int,
+            (c_void_p, POINTER(c_uint), c_size_t, POINTER(c_int), POINTER(c_double)),
+        ),
+        (
+            "fmi2GetRealOutputDerivatives",
+            c_int,
+            (c_void_p, POINTER(c_uint), c_size_t, POINTER(c_int), POINTER(c_double)),
+        ),
         ("fmi2DoStep", c_int, (c_void_p, c_double, c_double, c_int)),
         ("fmi2CancelStep", c_int, (c_void_p,)),
         ("fmi2GetStatus", c_int, (c_void_p, c_int, POINTER(c_int))),
@@ -202,6 +256,7 @@ def raw(unzipped: str) -> Raw:
 # ------------------------------------------------------------------------------------------
 # packaging
 
+
 def test_validate_fmu_finds_no_problem(fmu_path: Path) -> None:
     assert validate_fmu(str(fmu_path)) == []
 
@@ -210,8 +265,12 @@ def test_binary_exports_only_fmi2_symbols(unzipped: str) -> None:
     nm = shutil.which("nm")
     if nm is None:
         pytest.skip("nm not available")
-    out = subprocess.run([nm, "-D", "--defined-only", str(shared_library(unzipped))],
-                         check=True, capture_output=True, text=True).stdout
+    out = subprocess.run(
+        [nm, "-D", "--defined-only", str(shared_library(unzipped))],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
     symbols = {line.split()[-1] for line in out.splitlines() if line.strip()}
     assert symbols, out
     assert {s for s in symbols if not s.startswith("fmi2")} == set()
@@ -222,29 +281,38 @@ def test_binary_links_only_libc_and_libm(unzipped: str) -> None:
     ldd = shutil.which("ldd")
     if ldd is None:
         pytest.skip("ldd not available")
-    out = subprocess.run([ldd, str(shared_library(unzipped))], check=True, capture_output=True,
-                         text=True).stdout
-    allowed = re.compile(r"^(linux-vdso\.so|linux-gate\.so|libc\.so|libm\.so|ld-linux[-\w.]*\.so"
-                         r"|/lib(64|x32)?/ld-linux[-\w.]*\.so)")
+    out = subprocess.run(
+        [ldd, str(shared_library(unzipped))], check=True, capture_output=True, text=True
+    ).stdout
+    allowed = re.compile(
+        r"^(linux-vdso\.so|linux-gate\.so|libc\.so|libm\.so|ld-linux[-\w.]*\.so"
+        r"|/lib(64|x32)?/ld-linux[-\w.]*\.so)"
+    )
     libraries = [line.split()[0] for line in out.splitlines() if line.strip()]
     assert libraries, out
-    assert [lib for lib in libraries if not allowed.match(Path(lib).name)
-            and not allowed.match(lib)] == [], out
+    assert [
+        lib for lib in libraries if not allowed.match(Path(lib).name) and not allowed.match(lib)
+    ] == [], out
 
 
 # ------------------------------------------------------------------------------------------
 # drift between modelDescription.xml and the C variable table
 
+
 @pytest.mark.parametrize("kind", ["ME", "CS"])
-def test_start_values_match_the_xml(make_fmu: MakeFmu, model_description: ModelDescription,
-                                    kind: str) -> None:
+def test_start_values_match_the_xml(
+    make_fmu: MakeFmu, model_description: ModelDescription, kind: str
+) -> None:
     fmu, log = make_fmu(kind)
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     with_start = [v for v in model_description.modelVariables if v.start is not None]
     assert len(with_start) > 50
-    mismatches = {v.name: (get_value(fmu, v), xml_start(v)) for v in with_start
-                  if get_value(fmu, v) != xml_start(v)}
+    mismatches = {
+        v.name: (get_value(fmu, v), xml_start(v))
+        for v in with_start
+        if get_value(fmu, v) != xml_start(v)
+    }
     assert mismatches == {}
     # vector reads give the same values as single reads
     reals = [v for v in with_start if v.type == "Real"]
@@ -255,9 +323,9 @@ def test_start_values_match_the_xml(make_fmu: MakeFmu, model_description: ModelD
 
 @pytest.mark.parametrize("kind", ["ME", "CS"])
 @pytest.mark.parametrize("phase", ["initialization", "running"])
-def test_every_value_reference_is_accepted(make_fmu: MakeFmu,
-                                           model_description: ModelDescription,
-                                           kind: str, phase: str) -> None:
+def test_every_value_reference_is_accepted(
+    make_fmu: MakeFmu, model_description: ModelDescription, kind: str, phase: str
+) -> None:
     fmu, log = make_fmu(kind)
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
@@ -271,8 +339,9 @@ def test_every_value_reference_is_accepted(make_fmu: MakeFmu,
 
 
 @pytest.mark.parametrize("kind", ["ME", "CS"])
-def test_getter_of_another_type_is_rejected(make_fmu: MakeFmu, vr: dict[str, int],
-                                            kind: str) -> None:
+def test_getter_of_another_type_is_rejected(
+    make_fmu: MakeFmu, vr: dict[str, int], kind: str
+) -> None:
     fmu, log = initialized(make_fmu, kind)
     assert_fmi_error(lambda: fmu.getReal([vr["contact.count"]]))
     assert_fmi_error(lambda: fmu.getInteger([vr["body1.x"]]))
@@ -283,9 +352,9 @@ def test_getter_of_another_type_is_rejected(make_fmu: MakeFmu, vr: dict[str, int
 
 @pytest.mark.parametrize("kind", ["ME", "CS"])
 @pytest.mark.parametrize("ref", [7, 17, 60, 94, 100, 124, 136, 9999, 2**32 - 1])
-def test_unknown_value_reference_is_rejected(make_fmu: MakeFmu,
-                                             model_description: ModelDescription,
-                                             kind: str, ref: int) -> None:
+def test_unknown_value_reference_is_rejected(
+    make_fmu: MakeFmu, model_description: ModelDescription, kind: str, ref: int
+) -> None:
     assert ref not in {v.valueReference for v in model_description.modelVariables}
     fmu, log = initialized(make_fmu, kind)
     getters: list[Callable[[], object]] = [
@@ -403,9 +472,12 @@ def _case_id(case: tuple[list[tuple[str, float]], tuple[str, float]]) -> str:
 
 @pytest.mark.parametrize("kind", ["ME", "CS"])
 @pytest.mark.parametrize("case", BAD_INPUTS, ids=[_case_id(c) for c in BAD_INPUTS])
-def test_bad_input_is_rejected(make_fmu: MakeFmu, model_description: ModelDescription,
-                               kind: str,
-                               case: tuple[list[tuple[str, float]], tuple[str, float]]) -> None:
+def test_bad_input_is_rejected(
+    make_fmu: MakeFmu,
+    model_description: ModelDescription,
+    kind: str,
+    case: tuple[list[tuple[str, float]], tuple[str, float]],
+) -> None:
     sets, (named, value) = case
     fmu, log = make_fmu(kind)
     fmu.setupExperiment(startTime=0.0)
@@ -421,8 +493,9 @@ def test_bad_input_is_rejected(make_fmu: MakeFmu, model_description: ModelDescri
 
 
 @pytest.mark.parametrize("kind", ["ME", "CS"])
-def test_bad_start_value_can_be_corrected_before_exit(make_fmu: MakeFmu, vr: dict[str, int],
-                                                      kind: str) -> None:
+def test_bad_start_value_can_be_corrected_before_exit(
+    make_fmu: MakeFmu, vr: dict[str, int], kind: str
+) -> None:
     """A rejected exitInitializationMode leaves the instance in initialization mode."""
     fmu, log = make_fmu(kind)
     fmu.setupExperiment(startTime=0.0)
@@ -445,8 +518,9 @@ def enter_running(fmu: FMU, kind: str) -> None:
 
 
 @pytest.mark.parametrize("kind", ["ME", "CS"])
-def test_tunable_parameter_after_initialization(make_fmu: MakeFmu, vr: dict[str, int],
-                                                kind: str) -> None:
+def test_tunable_parameter_after_initialization(
+    make_fmu: MakeFmu, vr: dict[str, int], kind: str
+) -> None:
     fmu, log = make_fmu(kind)
     enter_running(fmu, kind)
     cr, xi = vr["contact.cr"], vr["contact.xi"]
@@ -477,8 +551,9 @@ def test_tunable_parameter_after_initialization(make_fmu: MakeFmu, vr: dict[str,
 
 @pytest.mark.parametrize("kind", ["ME", "CS"])
 @pytest.mark.parametrize("bad", [NAN, INF, -INF])
-def test_non_finite_input_after_initialization(make_fmu: MakeFmu, vr: dict[str, int], kind: str,
-                                               bad: float) -> None:
+def test_non_finite_input_after_initialization(
+    make_fmu: MakeFmu, vr: dict[str, int], kind: str, bad: float
+) -> None:
     fmu, log = make_fmu(kind)
     enter_running(fmu, kind)
     if kind == "ME":
@@ -492,9 +567,11 @@ def test_non_finite_input_after_initialization(make_fmu: MakeFmu, vr: dict[str, 
 # ------------------------------------------------------------------------------------------
 # illegal call sequences: fmi2Error, a log line, and the instance keeps working
 
+
 @pytest.mark.parametrize("kind", ["ME", "CS"])
-def test_illegal_calls_before_initialization(make_fmu: MakeFmu, vr: dict[str, int],
-                                             kind: str) -> None:
+def test_illegal_calls_before_initialization(
+    make_fmu: MakeFmu, vr: dict[str, int], kind: str
+) -> None:
     fmu, log = make_fmu(kind)
     assert_fmi_error(fmu.exitInitializationMode)
     assert "fmi2ExitInitializationMode: illegal call in state Instantiated" in log.text()
@@ -517,17 +594,25 @@ def test_illegal_calls_before_initialization(make_fmu: MakeFmu, vr: dict[str, in
 
 
 @pytest.mark.parametrize("kind", ["ME", "CS"])
-def test_illegal_calls_after_initialization(make_fmu: MakeFmu, vr: dict[str, int],
-                                            kind: str) -> None:
+def test_illegal_calls_after_initialization(
+    make_fmu: MakeFmu, vr: dict[str, int], kind: str
+) -> None:
     fmu, log = initialized(make_fmu, kind)
     assert_fmi_error(lambda: fmu.setupExperiment(startTime=0.0))
     assert "fmi2SetupExperiment: illegal call" in log.text()
     assert_fmi_error(fmu.enterInitializationMode)
     assert_fmi_error(fmu.exitInitializationMode)
     # fixed parameters, calculated parameters, state start values and outputs cannot be set
-    for name, value in [("contact.R1", 0.17), ("body1.m", 5.0), ("contact.delta", 0.01),
-                        ("body1.x", 0.0), ("contact.F_N", 1.0), ("energy.total", 0.0),
-                        ("der(body1.vx)", 0.0), ("time", 1.0)]:
+    for name, value in [
+        ("contact.R1", 0.17),
+        ("body1.m", 5.0),
+        ("contact.delta", 0.01),
+        ("body1.x", 0.0),
+        ("contact.F_N", 1.0),
+        ("energy.total", 0.0),
+        ("der(body1.vx)", 0.0),
+        ("time", 1.0),
+    ]:
         before = fmu.getReal([vr[name]])
         assert_fmi_error(lambda name=name, value=value: fmu.setReal([vr[name]], [value]))
         assert f"variable {name} cannot be set" in log.text()
@@ -538,8 +623,9 @@ def test_illegal_calls_after_initialization(make_fmu: MakeFmu, vr: dict[str, int
     assert_fmi_error(lambda: fmu.setBoolean([vr["contact.active"]], [True]))
     assert fmu.getInteger([vr["contact.law"]]) == [2]
     # unsupported optional functions
-    assert_fmi_error(lambda: fmu.getDirectionalDerivative([vr["der(body1.vx)"]],
-                                                          [vr["body1.x"]], [1.0]))
+    assert_fmi_error(
+        lambda: fmu.getDirectionalDerivative([vr["der(body1.vx)"]], [vr["body1.x"]], [1.0])
+    )
 
 
 def test_illegal_model_exchange_sequences(make_fmu: MakeFmu, vr: dict[str, int], raw: Raw) -> None:
@@ -616,6 +702,7 @@ def test_failed_step_blocks_further_steps(make_fmu: MakeFmu, vr: dict[str, int])
 
 # ------------------------------------------------------------------------------------------
 # NULL arguments and wrong GUID, through the C functions directly
+
 
 def test_null_arguments_return_error(make_fmu: MakeFmu, vr: dict[str, int], raw: Raw) -> None:
     fmu, log = initialized(make_fmu, "ME")  # event mode
@@ -754,9 +841,9 @@ def test_null_component_returns_error(raw: Raw) -> None:
     raw("fmi2FreeInstance", null)  # must not crash
 
 
-def test_instantiate_checks_its_arguments(make_fmu: MakeFmu,
-                                          model_description: ModelDescription,
-                                          raw: Raw) -> None:
+def test_instantiate_checks_its_arguments(
+    make_fmu: MakeFmu, model_description: ModelDescription, raw: Raw
+) -> None:
     _, log = make_fmu("ME")  # only for its logging callbacks
     callbacks = byref(log.callbacks)
     guid = model_description.guid.encode()
@@ -798,6 +885,7 @@ def test_instances_are_independent(make_fmu: MakeFmu, vr: dict[str, int]) -> Non
 # ------------------------------------------------------------------------------------------
 # non-finite values of the model
 
+
 def test_non_finite_derivative_is_an_error(make_fmu: MakeFmu, vr: dict[str, int]) -> None:
     """g = 1e308 is inside the declared range [0, inf), but m g overflows to -inf in der(vy)."""
     fmu, log = make_fmu("ME")
@@ -830,8 +918,9 @@ def test_non_finite_contact_force_is_an_error(make_fmu: MakeFmu, vr: dict[str, i
 
 
 @pytest.mark.parametrize("bad", [NAN, INF, -INF])
-def test_set_continuous_states_rejects_non_finite(make_fmu: MakeFmu, vr: dict[str, int],
-                                                  bad: float) -> None:
+def test_set_continuous_states_rejects_non_finite(
+    make_fmu: MakeFmu, vr: dict[str, int], bad: float
+) -> None:
     fmu, log = initialized(make_fmu, "ME")
     fmu.newDiscreteStates()
     fmu.enterContinuousTimeMode()

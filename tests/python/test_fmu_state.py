@@ -24,12 +24,19 @@ ME_STEP = 2e-5  # fixed-step RK4: the contact period is ~0.7 ms, omega dt ~ 0.2
 ME_RECORD_EVERY = 25
 
 STATES = ["body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega"]
-REAL_OUTPUTS = [*STATES, "contact.F_N", "contact.F_T", "contact.gap", "contact.onset_speed",
-                "energy.total"]
+REAL_OUTPUTS = [
+    *STATES,
+    "contact.F_N",
+    "contact.F_T",
+    "contact.gap",
+    "contact.onset_speed",
+    "energy.total",
+]
 
 
 # ------------------------------------------------------------------------------------------
 # helpers
+
 
 def setup_scene(fmu: FMU2Model | FMU2Slave, vr: dict[str, int]) -> None:
     """Instantiated -> initialized with the scene of this module."""
@@ -145,6 +152,7 @@ def assert_identical(a: np.ndarray, b: np.ndarray) -> None:
 # ------------------------------------------------------------------------------------------
 # model exchange
 
+
 def me_prepared(make_fmu: MakeFmu, vr: dict[str, int]) -> tuple[FMU2Model, Any, MERunner, float]:
     fmu, log = make_fmu("ME")
     setup_scene(fmu, vr)
@@ -217,8 +225,10 @@ def test_me_state_restores_parameters_and_time(make_fmu: MakeFmu, vr: dict[str, 
 # ------------------------------------------------------------------------------------------
 # co-simulation
 
-def cs_prepared(make_fmu: MakeFmu, vr: dict[str, int], t_save: float
-                ) -> tuple[FMU2Slave, Any, float]:
+
+def cs_prepared(
+    make_fmu: MakeFmu, vr: dict[str, int], t_save: float
+) -> tuple[FMU2Slave, Any, float]:
     fmu, log = make_fmu("CS")
     setup_scene(fmu, vr)
     t, _ = cs_run(fmu, vr, 0.0, t_save)
@@ -265,8 +275,9 @@ def test_cs_serialized_state_replays_identically(make_fmu: MakeFmu, vr: dict[str
     assert not log.errors() and not other_log.errors()
 
 
-def test_cs_state_saved_in_contact_restores_discrete_state(make_fmu: MakeFmu,
-                                                           vr: dict[str, int]) -> None:
+def test_cs_state_saved_in_contact_restores_discrete_state(
+    make_fmu: MakeFmu, vr: dict[str, int]
+) -> None:
     """Saved during the first contact (count 1, active), restored after the second one."""
     fmu, log, t_save = cs_prepared(make_fmu, vr, 0.075)
     saved = discrete_state(fmu, vr)
@@ -285,8 +296,9 @@ def test_cs_state_saved_in_contact_restores_discrete_state(make_fmu: MakeFmu,
     assert not log.errors()
 
 
-def test_get_state_does_not_change_the_trajectory_much(make_fmu: MakeFmu,
-                                                       vr: dict[str, int]) -> None:
+def test_get_state_does_not_change_the_trajectory_much(
+    make_fmu: MakeFmu, vr: dict[str, int]
+) -> None:
     """Taking a state restarts the CS integrator at that point: the result stays within the
     integration tolerance of an uninterrupted run."""
     plain, _ = make_fmu("CS")
@@ -302,6 +314,7 @@ def test_get_state_does_not_change_the_trajectory_much(make_fmu: MakeFmu,
 
 # ------------------------------------------------------------------------------------------
 # fmi2Reset
+
 
 def start_values(model_description: ModelDescription) -> dict[str, tuple[str, Any]]:
     out: dict[str, tuple[str, Any]] = {}
@@ -326,13 +339,15 @@ def read(fmu: FMU2Model | FMU2Slave, vr: dict[str, int], kind: str, name: str) -
 
 
 @pytest.mark.parametrize("kind", ["ME", "CS"])
-def test_reset_returns_to_start_values(make_fmu: MakeFmu, vr: dict[str, int],
-                                       model_description: ModelDescription, kind: str) -> None:
+def test_reset_returns_to_start_values(
+    make_fmu: MakeFmu, vr: dict[str, int], model_description: ModelDescription, kind: str
+) -> None:
     fmu, log = make_fmu(kind)
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
-    fmu.setReal([vr["contact.cr"], vr["body1.m"], vr["body1.x"], vr["F_ext[1]"]],
-                [0.5, 3.0, 0.005, 2.0])
+    fmu.setReal(
+        [vr["contact.cr"], vr["body1.m"], vr["body1.x"], vr["F_ext[1]"]], [0.5, 3.0, 0.005, 2.0]
+    )
     fmu.setInteger([vr["contact.law"]], [3])
     fmu.setBoolean([vr["flexure.enabled"]], [False])
     fmu.exitInitializationMode()

@@ -1,0 +1,37 @@
+"""One entry point for every model: `simulate(scene, model)`."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from . import model_info
+from .fmu_runner import simulate_cs, simulate_me
+from .moreau import moreau
+from .progress import Progress
+from .results import Trajectory
+from .scene import Scene
+
+INTERFACES = ("me", "cs")
+
+
+def simulate(
+    scene: Scene, model: str, *, interface: str = "me", quiet: bool = True, **options: Any
+) -> Trajectory:
+    """Run `model` (a contact law of the FMU, or "Moreau") on `scene`.
+
+    Event-driven laws run through the FMU, by model exchange with fmpy's CVode (interface "me",
+    default) or by co-simulation with CVODE inside the FMU ("cs"); "Moreau" runs the time
+    stepper of the C core. Options are passed to simulate_me / simulate_cs / moreau."""
+    if model not in model_info.MODELS:
+        raise ValueError(f"unknown model {model!r} (known: {', '.join(model_info.MODELS)})")
+    if interface not in INTERFACES:
+        raise ValueError(f"unknown interface {interface!r} (known: {', '.join(INTERFACES)})")
+    progress = Progress(f"{scene.name}: {model}", quiet=quiet)
+    try:
+        if model == "Moreau":
+            return moreau(scene, **options)
+        if interface == "cs":
+            return simulate_cs(scene, model, progress=progress, **options)
+        return simulate_me(scene, model, progress=progress, **options)
+    finally:
+        progress.close()
