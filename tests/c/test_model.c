@@ -1,0 +1,609 @@
+/* The model layer (csfh_model.[ch]): defaults and parameter validation, the right-hand side with
+ * parts switched off (evaluation counters), free fall, flexure and contact forces in the
+ * derivatives, outputs, and the event indicator / event update logic of the compliant contact. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "csfh_model.h"
+#include "csfh_test.h"
+
+#define MSG_SIZE 512
+
+static int set_by_name(csfh_model_t *m, const char *name, double value)
+{
+    const csfh_variable_t *v = csfh_variable_by_name(name);
+    if (!CHECK_TRUE(v != NULL, TFMT("variable %s exists", name))) {
+        return -1;
+    }
+    if (v->type == CSFH_TYPE_REAL) {
+        *csfh_variable_real(m, v) = value;
+    } else {
+        *csfh_variable_int(m, v) = (int)value;
+    }
+    return 0;
+}
+
+static void setup_default(csfh_model_t *m)
+{
+    char msg[MSG_SIZE] = "";
+    csfh_model_set_defaults(m);
+    const int rc = csfh_model_prepare(m, msg, sizeof(msg));
+    if (rc != 0) {
+        printf("     prepare failed: %s\n", msg);
+    }
+}
+
+/* ---------------------------------------------------------------------------------------- */
+static void test_defaults_prepare(void)
+{
+    csfh_model_t m;
+    char msg[MSG_SIZE] = "";
+    csfh_model_set_defaults(&m);
+    /* a few start values of the `paper` preset (PHYSICS.md 1.1, 9) */
+    CHECK_ABS(m.p.m1, 10.0, 0.0, "default body1.m = 10");
+    CHECK_ABS(m.p.I1, 0.1617, 0.0, "default body1.I = 0.1617");
+    CHECK_ABS(m.p.g, 9.81, 0.0, "default g = 9.81");
+    CHECK_ABS(m.p.R1, 0.18, 0.0, "default R1");
+    CHECK_ABS(m.p.R2, 0.20, 0.0, "default R2");
+    CHECK_ABS(m.p.cr, 0.9, 0.0, "default c_r");
+    CHECK_ABS(m.p.E1, 210e9, 0.0, "default E1 = 210 GPa (paper preset)");
+    CHECK_ABS(m.p.beta, 5.0 * TEST_PI / 3.0, 1e-15, "default beta = 300 deg");
+    CHECK_ABS(m.x[0], 0.01, 0.0, "default q0 = [0.01, 0.01, 0]: x");
+    CHECK_ABS(m.x[1], 0.01, 0.0, "default q0: y");
+    CHECK_INT(m.p.law, CSFH_CONTACTLAW_LN_SPHERES, "default law LN_spheres");
+    CHECK_INT(m.p.esdu_reading, CSFH_ESDUREADING_I3, "default ESDU reading I3 (paper)");
+    CHECK_INT(m.p.flexure_enabled, 1, "flexure on by default");
+    CHECK_INT(m.p.friction_enabled, 1, "friction on by default");
+    CHECK_INT(m.p.conservative, 0, "co-rotated flexure by default");
+
+    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare succeeds with the start values");
+    const double ssum = 2.0 * (1.0 - 0.09) / 210e9;
+    CHECK_CLOSE(m.d.delta, 0.02, 1e-14, "delta = R2 - R1 = 0.02");
+    CHECK_CLOSE(m.d.K_spheres, 4.0 / (3.0 * ssum) * sqrt(0.18 * 0.2 / 0.38), 1e-14,
+                "K_spheres = Eq. 14 external with E = 210 GPa");
+    CHECK_CLOSE(m.d.K_spheres, 4.7353e10, tol_digits(4.7353e10, 5), "K_spheres = 47.353 GPa m^0.5");
+    CHECK_CLOSE(m.d.K_cylinders, 0.25 * TEST_PI / ssum * 0.025, 1e-14, "K_cylinders = (pi/4) E* b");
+    CHECK_CLOSE(m.d.xi, 0.1425, 1e-14, "xi (LN, c_r = 0.9) = 0.1425");
+    CHECK_CLOSE(m.d.esdu_F_max, 4.0 * 0.025 * 0.02 / (2.0 * 0.91 / (TEST_PI * 210e9)), 1e-13,
+                "ESDU F* = 4 L dR/(sigma1 + sigma2), sigma with pi");
+    CHECK_CLOSE(m.d.sbar[0], 0.292, 1e-14, "sbar_x = 0.292");
+    CHECK_CLOSE(m.d.sbar[1], 0.1 - 0.072 * sqrt(3.0), 1e-13, "sbar_y = -0.0247077");
+    CHECK_CLOSE(m.d.normal.K, m.d.K_spheres, 0.0, "LN_spheres uses K_spheres");
+    CHECK_CLOSE(m.d.normal.n, 1.5, 0.0, "LN_spheres exponent 1.5");
+    CHECK_CLOSE(m.d.flexure.K0[0][0], 3235.980, 1e-6, "K0[0][0] = 3235.980 (full compliance)");
+    CHECK_CLOSE(m.d.flexure.K0[2][2], 150.6236, 1e-6, "K0[2][2] = 150.6236");
+
+    /* K given instead of from materials (Table 2 values), and the cylinder law's exponent */
+    set_by_name(&m, "contact.K_from_materials", 0);
+    set_by_name(&m, "contact.law", CSFH_CONTACTLAW_LN_CYLINDERS);
+    set_by_name(&m, "contact.n_cylinders", 1.0);
+    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare with given K");
+    CHECK_ABS(m.d.K_spheres, 47.35e9, 0.0, "K_spheres_given used");
+    CHECK_ABS(m.d.K_cylinders, 2.27e9, 0.0, "K_cylinders_given used");
+    CHECK_ABS(m.d.normal.K, 2.27e9, 0.0, "LN_cylinders uses K_cylinders");
+    CHECK_ABS(m.d.normal.n, 1.0, 0.0, "LN_cylinders uses n_cylinders");
+    /* consistent preset: internal R_eff with E = 100 GPa -> 9.8289e10 */
+    csfh_model_set_defaults(&m);
+    set_by_name(&m, "contact.E1", 100e9);
+    set_by_name(&m, "contact.E2", 100e9);
+    set_by_name(&m, "contact.Reff_internal", 1);
+    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare, consistent preset");
+    CHECK_CLOSE(m.d.K_spheres, 9.8289e10, tol_digits(9.8289e10, 5), "consistent: K_spheres internal = 9.8289e10");
+    /* other laws select their damping factor */
+    set_by_name(&m, "contact.law", CSFH_CONTACTLAW_FLORES);
+    csfh_model_prepare(&m, msg, sizeof(msg));
+    CHECK_CLOSE(m.d.xi, 0.8 / 4.5, 1e-14, "Flores xi in the model");
+    set_by_name(&m, "contact.law", CSFH_CONTACTLAW_HUNTCROSSLEY);
+    csfh_model_prepare(&m, msg, sizeof(msg));
+    CHECK_CLOSE(m.d.xi, 0.15, 1e-14, "Hunt-Crossley xi in the model");
+    set_by_name(&m, "contact.law", CSFH_CONTACTLAW_NONE);
+    csfh_model_prepare(&m, msg, sizeof(msg));
+    CHECK_ABS(m.d.xi, 0.0, 0.0, "law none: xi = 0");
+}
+
+/* ---------------------------------------------------------------------------------------- */
+typedef struct {
+    const char *name;   /* variable to corrupt */
+    double value;
+    const char *named;  /* text that the message must contain (variable name) */
+} bad_case_t;
+
+/* The message must show the corrupted value after "<name> = ", readable back exactly (or as
+ * nan / inf of the right sign). */
+static int message_shows_value(const char *msg, const char *name, double value)
+{
+    char key[128];
+    snprintf(key, sizeof(key), "%s = ", name);
+    const char *p = strstr(msg, key);
+    if (p == NULL) {
+        return 0;
+    }
+    p += strlen(key);
+    char *end = NULL;
+    const double got = strtod(p, &end);
+    if (end == p) {
+        return 0;
+    }
+    return isnan(value) ? isnan(got) : got == value;
+}
+
+static void test_prepare_rejects(void)
+{
+    const double nan = NAN, inf = INFINITY;
+    const bad_case_t cases[] = {
+        {"contact.R1", 0.2, "contact.R1"}, /* R1 = R2 */
+        {"contact.R1", 0.25, "contact.R1"}, /* R1 > R2 */
+        {"contact.R2", 0.1, "contact.R2"}, /* R2 < R1 */
+        {"contact.R1", 0.0, "contact.R1"},
+        {"body1.m", 0.0, "body1.m"},
+        {"body1.m", -1.0, "body1.m"},
+        {"body1.I", 0.0, "body1.I"},
+        {"body1.I", -0.1617, "body1.I"},
+        {"contact.cr", 0.0, "contact.cr"},
+        {"contact.cr", -0.1, "contact.cr"},
+        {"contact.cr", 1.0000001, "contact.cr"},
+        {"contact.cr", 2.0, "contact.cr"},
+        {"contact.E1", 0.0, "contact.E1"},
+        {"contact.E2", -210e9, "contact.E2"},
+        {"flexure.E", 0.0, "flexure.E"},
+        {"flexure.E", -1.0, "flexure.E"},
+        {"contact.nu1", -1.0, "contact.nu1"},
+        {"contact.nu1", 0.5, "contact.nu1"},
+        {"contact.nu2", 0.7, "contact.nu2"},
+        {"flexure.nu", 0.5, "flexure.nu"},
+        {"flexure.nu", -1.5, "flexure.nu"},
+        {"flexure.rho", 0.0, "flexure.rho"},
+        {"flexure.rho", -0.144, "flexure.rho"},
+        {"flexure.h", 0.0, "flexure.h"},
+        {"flexure.h", -0.005, "flexure.h"},
+        {"flexure.b", 0.0, "flexure.b"},
+        {"contact.L", 0.0, "contact.L"},
+        {"flexure.beta", 0.0, "flexure.beta"},
+        {"flexure.beta", 2.0 * TEST_PI, "flexure.beta"},
+        {"flexure.beta", 7.0, "flexure.beta"},
+        {"flexure.beta", -1.0, "flexure.beta"},
+        {"friction.v1", 1e-4, "friction.v1"}, /* v1 = v0 */
+        {"friction.v1", 5e-5, "friction.v1"},
+        {"friction.v0", 0.02, "friction.v1"}, /* v0 > v1: cross-check */
+        {"friction.v0", -1e-4, "friction.v0"},
+        {"friction.fd", -0.1, "friction.fd"},
+        {"g", -9.81, "g ="},
+        {"contact.v_min", 0.0, "contact.v_min"},
+        {"contact.gap_hysteresis", 0.0, "contact.gap_hysteresis"},
+        {"contact.law", 0, "contact.law"},
+        {"contact.law", 7, "contact.law"},
+        {"contact.esdu_reading", 0, "contact.esdu_reading"},
+        {"contact.esdu_reading", 3, "contact.esdu_reading"},
+        {"friction.enabled", 2, "friction.enabled"},
+        {"flexure.bending_only", -1, "flexure.bending_only"},
+        /* non-finite values, also in parameters without a range, states and inputs */
+        {"contact.cr", nan, "contact.cr"},
+        {"body1.m", inf, "body1.m"},
+        {"g", -inf, "g ="},
+        {"flexure.OF[1]", nan, "flexure.OF[1]"},
+        {"body1.s1[2]", inf, "body1.s1[2]"},
+        {"flexure.phi_root", -inf, "flexure.phi_root"},
+        {"contact.K_spheres_given", inf, "contact.K_spheres_given"},
+        {"body1.x", nan, "body1.x"},
+        {"body1.omega", inf, "body1.omega"},
+        {"F_ext[1]", nan, "F_ext[1]"},
+        {"M_ext", -inf, "M_ext"},
+    };
+    for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+        csfh_model_t m;
+        char msg[MSG_SIZE] = "";
+        setup_default(&m);
+        const csfh_derived_t before = m.d;
+        if (set_by_name(&m, cases[i].name, cases[i].value) != 0) {
+            continue;
+        }
+        const int rc = csfh_model_prepare(&m, msg, sizeof(msg));
+        CHECK_INT(rc, -1, TFMT("prepare rejects %s = %g", cases[i].name, cases[i].value));
+        CHECK_STR_CONTAINS(msg, cases[i].named, TFMT("message names %s", cases[i].named));
+        if (!CHECK_TRUE(message_shows_value(msg, cases[i].name, cases[i].value),
+                        TFMT("message shows %s = %.17g", cases[i].name, cases[i].value))) {
+            printf("     message: %s\n", msg);
+        }
+        CHECK_TRUE(memcmp(&before, &m.d, sizeof(before)) == 0,
+                   TFMT("derived quantities unchanged after rejecting %s", cases[i].name));
+        if (csfh_test_verbose()) {
+            printf("     message: %s\n", msg);
+        }
+    }
+    /* the R1 >= R2 message names both radii */
+    {
+        csfh_model_t m;
+        char msg[MSG_SIZE] = "";
+        setup_default(&m);
+        m.p.R1 = 0.2;
+        csfh_model_prepare(&m, msg, sizeof(msg));
+        CHECK_STR_CONTAINS(msg, "contact.R2", "R1 >= R2 message names contact.R2 too");
+    }
+    /* valid boundary values are accepted */
+    const struct {
+        const char *name;
+        double value;
+    } good[] = {
+        {"contact.cr", 1.0},       {"contact.cr", 1e-6},       {"contact.nu1", 0.49},
+        {"contact.nu1", -0.99},    {"flexure.nu", 0.0},        {"flexure.beta", 1e-3},
+        {"flexure.beta", 6.28},    {"g", 0.0},                 {"friction.v0", 0.0},
+        {"friction.fd", 0.0},      {"body1.s1[1]", -0.05},     {"flexure.phi_root", -2.0},
+        {"contact.R1", 0.19999},   {"contact.law", 1},         {"contact.law", 6},
+        {"contact.esdu_reading", 2}, {"F_ext[2]", -1e6},
+    };
+    for (size_t i = 0; i < sizeof(good) / sizeof(good[0]); i++) {
+        csfh_model_t m;
+        char msg[MSG_SIZE] = "";
+        setup_default(&m);
+        set_by_name(&m, good[i].name, good[i].value);
+        const int rc = csfh_model_prepare(&m, msg, sizeof(msg));
+        if (!CHECK_INT(rc, 0, TFMT("prepare accepts %s = %.17g", good[i].name, good[i].value))) {
+            printf("     message: %s\n", msg);
+        }
+    }
+    /* a small message buffer is not overrun (ASan) and stays terminated */
+    {
+        csfh_model_t m;
+        char small[8];
+        setup_default(&m);
+        m.p.cr = 5.0;
+        CHECK_INT(csfh_model_prepare(&m, small, sizeof(small)), -1, "rejects with a small buffer");
+        CHECK_TRUE(memchr(small, '\0', sizeof(small)) != NULL, "small message buffer terminated");
+    }
+}
+
+/* ---------------------------------------------------------------------------------------- */
+static void test_counters(void)
+{
+    /* a state in contact and sliding: gap = -1e-4, v_T != 0 */
+    const double x[6] = {0.0, -0.0201, 0.0, 0.3, -0.5, 0.2};
+    double xdot[6];
+    for (int variant = 0; variant < 4; variant++) {
+        csfh_model_t m;
+        char msg[MSG_SIZE] = "";
+        csfh_model_set_defaults(&m);
+        const char *what = "all on";
+        if (variant == 1) {
+            m.p.flexure_enabled = 0;
+            what = "flexure off";
+        } else if (variant == 2) {
+            m.p.friction_enabled = 0;
+            what = "friction off";
+        } else if (variant == 3) {
+            m.p.law = CSFH_CONTACTLAW_NONE;
+            what = "law none";
+        }
+        CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, TFMT("prepare (%s)", what));
+        memcpy(m.x, x, sizeof(x));
+        for (int k = 0; k < 5; k++) {
+            CHECK_INT(csfh_model_derivatives(&m, x, xdot), CSFH_OK, TFMT("derivatives OK (%s)", what));
+        }
+        csfh_model_outputs(&m);
+        CHECK_INT(m.counters.rhs, 5, TFMT("rhs counter = 5 (%s)", what));
+        CHECK_INT(m.counters.flexure, variant == 1 ? 0 : 6, TFMT("flexure counter (%s)", what));
+        CHECK_INT(m.counters.contact, variant == 3 ? 0 : 6, TFMT("contact counter (%s)", what));
+        CHECK_INT(m.counters.friction, (variant == 2 || variant == 3) ? 0 : 6,
+                  TFMT("friction counter (%s)", what));
+        if (variant == 3) {
+            CHECK_ABS(m.out.F_N, 0.0, 0.0, "law none: no normal force even inside the gap");
+            CHECK_ABS(m.out.F_T, 0.0, 0.0, "law none: no friction force");
+        }
+        if (variant == 2) {
+            CHECK_TRUE(m.out.F_N > 0.0, "friction off: normal force present");
+            CHECK_ABS(m.out.F_T, 0.0, 0.0, "friction off: F_T = 0");
+        }
+    }
+    /* counters saturate instead of overflowing (UBSan) */
+    csfh_model_t m;
+    setup_default(&m);
+    m.counters.rhs = 2147483647;
+    csfh_model_derivatives(&m, x, xdot);
+    CHECK_INT(m.counters.rhs, 2147483647, "rhs counter saturates at INT_MAX");
+}
+
+/* ---------------------------------------------------------------------------------------- */
+static void test_derivatives(void)
+{
+    char msg[MSG_SIZE] = "";
+    csfh_model_t m;
+    double xdot[6];
+
+    /* first free-fall derivatives of the default start state, flexure off: [v, -g] */
+    csfh_model_set_defaults(&m);
+    m.p.flexure_enabled = 0;
+    csfh_model_prepare(&m, msg, sizeof(msg));
+    csfh_model_init_discrete(&m);
+    CHECK_INT(csfh_model_derivatives(&m, m.x, xdot), CSFH_OK, "free fall: OK");
+    const double ff[6] = {0.0, 0.0, 0.0, 0.0, -9.81, 0.0};
+    for (int i = 0; i < 6; i++) {
+        CHECK_ABS(xdot[i], ff[i], 0.0, TFMT("free fall from the start state: xdot[%d]", i));
+    }
+    /* moving, rotated, out of contact, with inputs */
+    const double x1[6] = {0.005, 0.01, 0.1, 0.3, -0.2, 0.5};
+    CHECK_INT(csfh_model_derivatives(&m, x1, xdot), CSFH_OK, "free flight: OK");
+    const double exp1[6] = {0.3, -0.2, 0.5, 0.0, -9.81, 0.0};
+    for (int i = 0; i < 6; i++) {
+        CHECK_ABS(xdot[i], exp1[i], 0.0, TFMT("free flight: xdot[%d] = [v, 0, -g, 0]", i));
+    }
+    m.u_in[0] = 1.0;
+    m.u_in[1] = 2.0;
+    m.u_in[2] = 0.3;
+    csfh_model_derivatives(&m, x1, xdot);
+    CHECK_CLOSE(xdot[3], 0.1, 1e-15, "input F_ext[1]/m");
+    CHECK_CLOSE(xdot[4], -9.81 + 0.2, 1e-15, "input (F_ext[2] - m g)/m");
+    CHECK_CLOSE(xdot[5], 0.3 / 0.1617, 1e-15, "input M_ext/I");
+    m.u_in[0] = m.u_in[1] = m.u_in[2] = 0.0;
+    /* non-finite derivatives -> CSFH_ERR_NONFINITE (the contract is on the derivatives: a NaN
+     * velocity is one; a NaN position with flexure off and no contact yields finite ones) */
+    const double xbad[6] = {0.0, 0.0, 0.0, NAN, 0.0, 0.0};
+    CHECK_INT(csfh_model_derivatives(&m, xbad, xdot), CSFH_ERR_NONFINITE, "NaN velocity -> error");
+    const double xinf[6] = {0.0, 0.0, 0.0, 0.0, 0.0, INFINITY};
+    CHECK_INT(csfh_model_derivatives(&m, xinf, xdot), CSFH_ERR_NONFINITE, "Inf angular velocity -> error");
+    m.p.flexure_enabled = 1;
+    const double xbad2[6] = {NAN, 0.0, 0.0, 0.0, 0.0, 0.0};
+    CHECK_INT(csfh_model_derivatives(&m, xbad2, xdot), CSFH_ERR_NONFINITE, "NaN position with flexure -> error");
+    m.p.flexure_enabled = 0;
+
+    /* flexure at q0 = [0.01, 0.01, 0] (out of contact): Q_e/M with PHYSICS 2.4's numbers */
+    csfh_model_set_defaults(&m);
+    csfh_model_prepare(&m, msg, sizeof(msg));
+    csfh_model_init_discrete(&m);
+    CHECK_INT(m.z.in_contact, 0, "q0 starts out of contact");
+    csfh_model_derivatives(&m, m.x, xdot);
+    CHECK_ABS(xdot[3] * 10.0, -38.914, 0.505e-3, "flexure: m xdot_vx = Q_e,x = -38.914");
+    CHECK_ABS(xdot[4] * 10.0 + 98.1, -46.482, 0.505e-3, "flexure: m (xdot_vy + g) = Q_e,y = -46.482");
+    /* moment: PHYSICS used the rounded Table-1 sbar (see test_flexure): bound 1.5e-4 N m */
+    CHECK_ABS(xdot[5] * 0.1617, -4.6926, 0.505e-4 + 1.5e-4, "flexure: I xdot_omega = Q_e,theta ~ -4.6926");
+
+    /* contact, central, flexure off: F_N = K rho^1.5 (1 + xi rhodot/rhodot0) along +Y */
+    csfh_model_set_defaults(&m);
+    m.p.flexure_enabled = 0;
+    csfh_model_prepare(&m, msg, sizeof(msg));
+    const double ssum = 2.0 * (1.0 - 0.09) / 210e9;
+    const double K = 4.0 / (3.0 * ssum) * sqrt(0.18 * 0.2 / 0.38);
+    const double rho = 1e-5, v = 0.5;
+    const double delta = m.d.delta;
+    double x2[6] = {0.0, -(delta + rho), 0.0, 0.0, -v, 0.0};
+    /* not yet in contact mode (a state the integrator probes before the event): onset = own rate */
+    CHECK_INT(csfh_model_derivatives(&m, x2, xdot), CSFH_OK, "contact: OK");
+    const double FN1 = K * pow(rho, 1.5) * (1.0 + 0.1425);
+    CHECK_CLOSE(xdot[4], (FN1 - 98.1) / 10.0, 1e-9, "contact probe: F_N = K rho^1.5 (1 + xi)");
+    CHECK_ABS(xdot[3], 0.0, 1e-12, "central contact: no horizontal force");
+    CHECK_ABS(xdot[5], 0.0, 1e-12, "central contact: no moment");
+    /* in contact mode with the onset speed captured at the event */
+    m.z.in_contact = 1;
+    m.z.onset_speed = 2.0;
+    csfh_model_derivatives(&m, x2, xdot);
+    const double FN2 = K * pow(rho, 1.5) * (1.0 + 0.1425 * v / 2.0);
+    CHECK_CLOSE(xdot[4], (FN2 - 98.1) / 10.0, 1e-9, "contact mode: F_N uses the stored onset speed");
+    /* sliding to +X at the bottom: v_T = -0.3, friction +f_d F_N along t_c = [-1, 0];
+     * moment a x F_T t_c = -R1 f_d F_N */
+    x2[3] = 0.3;
+    csfh_model_derivatives(&m, x2, xdot);
+    CHECK_CLOSE(xdot[3], -0.055 * FN2 / 10.0, 1e-9, "sliding: friction opposes the motion");
+    CHECK_CLOSE(xdot[5], -0.18 * 0.055 * FN2 / 0.1617, 1e-9, "sliding: friction moment -R1 f_d F_N");
+    CHECK_CLOSE(xdot[4], (FN2 - 98.1) / 10.0, 1e-9, "sliding: normal force unchanged");
+    /* outputs at this state */
+    memcpy(m.x, x2, sizeof(x2));
+    CHECK_INT(csfh_model_outputs(&m), CSFH_OK, "outputs OK");
+    CHECK_CLOSE(m.out.F_N, FN2, 1e-12, "output F_N");
+    CHECK_CLOSE(m.out.F_T, 0.055 * FN2, 1e-12, "output F_T");
+    CHECK_CLOSE(m.out.gap, -rho, 1e-9, "output gap");
+    CHECK_CLOSE(m.out.indentation, rho, 1e-9, "output indentation");
+    CHECK_CLOSE(m.out.indentation_rate, v, 1e-14, "output indentation rate");
+    CHECK_CLOSE(m.out.v_T, -0.3, 1e-14, "output v_T");
+    CHECK_CLOSE(m.out.E_kinetic, 0.5 * 10.0 * (0.09 + 0.25), 1e-14, "output kinetic energy");
+    CHECK_CLOSE(m.out.E_gravity, 10.0 * 9.81 * x2[1], 1e-14, "output gravity energy m g y");
+    CHECK_CLOSE(m.out.E_contact, K * pow(rho, 2.5) / 2.5, 1e-9, "output contact energy K rho^2.5/2.5");
+    CHECK_ABS(m.out.E_flexure, 0.0, 0.0, "flexure off: no flexure energy");
+    CHECK_CLOSE(m.out.E_total, m.out.E_kinetic + m.out.E_gravity + m.out.E_contact, 1e-14, "total energy");
+}
+
+/* ---------------------------------------------------------------------------------------- */
+static double own_gap(const csfh_model_t *m, const double x[6])
+{
+    const double c = cos(x[2]), s = sin(x[2]);
+    const double ex = x[0] + c * m->p.s1bar[0] - s * m->p.s1bar[1];
+    const double ey = x[1] + s * m->p.s1bar[0] + c * m->p.s1bar[1];
+    return (m->p.R2 - m->p.R1) - sqrt(ex * ex + ey * ey);
+}
+
+static void test_events(void)
+{
+    char msg[MSG_SIZE] = "";
+    csfh_model_t m;
+    csfh_model_set_defaults(&m);
+    m.p.flexure_enabled = 0;
+    m.p.gap_hysteresis = 1e-6;
+    csfh_model_prepare(&m, msg, sizeof(msg));
+    const double eps = 1e-6, delta = m.d.delta;
+
+    /* out of contact: z = gap */
+    const double xa[6] = {0.0, 0.01, 0.0, 0.1, -0.7, 0.3};
+    memcpy(m.x, xa, sizeof(xa));
+    csfh_model_init_discrete(&m);
+    CHECK_INT(m.z.in_contact, 0, "start out of contact");
+    CHECK_INT(m.z.contact_count, 0, "no contacts yet");
+    CHECK_ABS(csfh_model_event_indicator(&m, m.x), own_gap(&m, m.x), 1e-17, "out of contact: z = gap");
+    CHECK_INT(csfh_model_event_update(&m), 0, "no mode change with gap > eps");
+
+    /* onset at gap <= 0: the indentation rate is captured */
+    const double xb[6] = {0.0, -(delta + 1e-9), 0.0, 0.1, -0.7, 0.3};
+    memcpy(m.x, xb, sizeof(xb));
+    CHECK_TRUE(csfh_model_event_indicator(&m, m.x) < 0.0, "indicator negative after crossing");
+    CHECK_INT(csfh_model_event_update(&m), 1, "onset at gap <= 0");
+    CHECK_INT(m.z.in_contact, 1, "in contact after the onset");
+    CHECK_INT(m.z.contact_count, 1, "contact count 1");
+    CHECK_CLOSE(m.z.onset_speed, 0.7, 1e-13, "onset speed = indentation rate -gamma_N = 0.7");
+    CHECK_ABS(csfh_model_event_indicator(&m, m.x), own_gap(&m, m.x) - 2.0 * eps, 1e-17,
+              "in contact: z = gap - 2 eps");
+    CHECK_TRUE(csfh_model_event_indicator(&m, m.x) <= -2.0 * eps, "indicator away from 0 after onset");
+    CHECK_INT(csfh_model_event_update(&m), 0, "no change at the same state");
+    /* still in contact for gap in (0, eps) */
+    const double xc[6] = {0.0, -(delta - 0.5 * eps), 0.0, 0.0, 0.7, 0.0};
+    memcpy(m.x, xc, sizeof(xc));
+    CHECK_INT(csfh_model_event_update(&m), 0, "no release for 0 < gap < eps");
+    CHECK_INT(m.z.in_contact, 1, "still in contact");
+    /* release when gap >= eps; indicator crosses 0 at gap = 2 eps */
+    const double xd[6] = {0.0, -(delta - 2.0 * eps), 0.0, 0.0, 0.7, 0.0};
+    memcpy(m.x, xd, sizeof(xd));
+    CHECK_ABS(csfh_model_event_indicator(&m, m.x), 0.0, 1e-15, "release indicator zero at gap = 2 eps");
+    CHECK_INT(csfh_model_event_update(&m), 2, "release at gap >= eps");
+    CHECK_INT(m.z.in_contact, 0, "out of contact after release");
+    CHECK_ABS(csfh_model_event_indicator(&m, m.x), own_gap(&m, m.x), 1e-17, "after release: z = gap");
+    CHECK_TRUE(csfh_model_event_indicator(&m, m.x) >= 1.9 * eps, "indicator away from 0 after release");
+    CHECK_CLOSE(m.z.onset_speed, 0.7, 1e-13, "onset speed kept after release (last contact)");
+    /* second onset counts */
+    memcpy(m.x, xb, sizeof(xb));
+    m.x[4] = -0.2;
+    CHECK_INT(csfh_model_event_update(&m), 1, "second onset");
+    CHECK_INT(m.z.contact_count, 2, "contact count 2");
+    CHECK_CLOSE(m.z.onset_speed, 0.2, 1e-13, "second onset speed 0.2");
+
+    /* eccentric O1 (s1bar != 0), rotating: onset speed = -dg/dt along the velocity (FD) */
+    csfh_model_set_defaults(&m);
+    m.p.flexure_enabled = 0;
+    m.p.s1bar[0] = 0.01;
+    m.p.s1bar[1] = -0.004;
+    csfh_model_prepare(&m, msg, sizeof(msg));
+    {
+        const double th = 0.4, ang = -2.0;
+        const double c = cos(th), s = sin(th);
+        const double s1[2] = {c * 0.01 + s * 0.004, s * 0.01 - c * 0.004};
+        const double r = m.d.delta + 1e-8;
+        const double x[6] = {r * cos(ang) - s1[0], r * sin(ang) - s1[1], th, 0.2, -0.6, 1.5};
+        memcpy(m.x, x, sizeof(x));
+        CHECK_INT(csfh_model_event_update(&m), 1, "eccentric: onset");
+        const double h = 1e-7;
+        double xp[6], xm[6];
+        for (int i = 0; i < 3; i++) {
+            xp[i] = x[i] + h * x[3 + i];
+            xm[i] = x[i] - h * x[3 + i];
+        }
+        const double gdot = (own_gap(&m, xp) - own_gap(&m, xm)) / (2.0 * h);
+        CHECK_ABS(m.z.onset_speed, -gdot, 1e-8, "eccentric: onset speed = -dg/dt (FD)");
+    }
+
+    /* initial state inside the contact -> contact mode from the start */
+    csfh_model_set_defaults(&m);
+    m.p.flexure_enabled = 0;
+    csfh_model_prepare(&m, msg, sizeof(msg));
+    memcpy(m.x, xb, sizeof(xb));
+    csfh_model_init_discrete(&m);
+    CHECK_INT(m.z.in_contact, 1, "init inside the gap: contact mode");
+    CHECK_INT(m.z.contact_count, 1, "init inside the gap: count 1");
+
+    /* law none: constant indicator, no mode changes */
+    csfh_model_set_defaults(&m);
+    m.p.law = CSFH_CONTACTLAW_NONE;
+    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare law none");
+    const double *states[3] = {xa, xb, xd};
+    double z0 = csfh_model_event_indicator(&m, xa);
+    for (int k = 0; k < 3; k++) {
+        memcpy(m.x, states[k], 6 * sizeof(double));
+        if (k == 0) {
+            csfh_model_init_discrete(&m);
+        }
+        CHECK_ABS(csfh_model_event_indicator(&m, m.x), z0, 0.0, TFMT("law none: indicator constant (%d)", k));
+        CHECK_INT(csfh_model_event_update(&m), 0, TFMT("law none: no mode change (%d)", k));
+        CHECK_INT(m.z.in_contact, 0, TFMT("law none: never in contact (%d)", k));
+        CHECK_INT(m.z.contact_count, 0, TFMT("law none: no contacts counted (%d)", k));
+    }
+    CHECK_TRUE(z0 > 0.0, "law none: indicator positive");
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* energy balance of the whole right-hand side (PHYSICS.md 7.5): c_r = 1, no friction, the
+ * conservative flexure (fixed K0) and gravity; own fixed-step RK4 through several impacts.
+ * The total energy output (kinetic + gravity + flexure + contact) must be conserved. */
+static void rk4_step(csfh_model_t *m, double *x, double h)
+{
+    double k1[6], k2[6], k3[6], k4[6], xt[6];
+    csfh_model_derivatives(m, x, k1);
+    for (int i = 0; i < 6; i++) {
+        xt[i] = x[i] + 0.5 * h * k1[i];
+    }
+    csfh_model_derivatives(m, xt, k2);
+    for (int i = 0; i < 6; i++) {
+        xt[i] = x[i] + 0.5 * h * k2[i];
+    }
+    csfh_model_derivatives(m, xt, k3);
+    for (int i = 0; i < 6; i++) {
+        xt[i] = x[i] + h * k3[i];
+    }
+    csfh_model_derivatives(m, xt, k4);
+    for (int i = 0; i < 6; i++) {
+        x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
+}
+
+/* max |E_total - E0| over 0.3 s with step h; returns the number of contact onsets */
+static double energy_drift(int flex, double h, int *contacts, double *E0_out)
+{
+    char msg[MSG_SIZE] = "";
+    csfh_model_t m;
+    csfh_model_set_defaults(&m);
+    m.p.cr = 1.0;
+    m.p.friction_enabled = 0;
+    m.p.flexure_enabled = flex;
+    m.p.conservative = 1;
+    if (!flex) { /* PHYSICS 7.5: q0 = [0, 0.01, 0], u0 = [0.3, 0, 0.5] */
+        const double x0[6] = {0.0, 0.01, 0.0, 0.3, 0.0, 0.5};
+        memcpy(m.x, x0, sizeof(x0));
+    }
+    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare (energy test)");
+    csfh_model_init_discrete(&m);
+    csfh_model_outputs(&m);
+    const double E0 = m.out.E_total;
+    double dEmax = 0.0;
+    double z = csfh_model_event_indicator(&m, m.x);
+    const int n = (int)(0.3 / h + 0.5);
+    for (int k = 0; k < n; k++) {
+        rk4_step(&m, m.x, h);
+        const double znew = csfh_model_event_indicator(&m, m.x);
+        if ((z > 0.0) != (znew > 0.0)) {
+            csfh_model_event_update(&m); /* mode bookkeeping only: xi = 0 at c_r = 1 */
+        }
+        z = csfh_model_event_indicator(&m, m.x);
+        if (k % 50 == 0) {
+            csfh_model_outputs(&m);
+            dEmax = fmax(dEmax, fabs(m.out.E_total - E0));
+        }
+    }
+    *contacts = m.z.contact_count;
+    *E0_out = E0;
+    return dEmax;
+}
+
+static void test_energy_conservation(void)
+{
+    for (int flex = 0; flex <= 1; flex++) {
+        int c1, c2;
+        double E0;
+        const double d1 = energy_drift(flex, 1e-6, &c1, &E0);
+        const double d2 = energy_drift(flex, 5e-7, &c2, &E0);
+        if (!flex) {
+            CHECK_CLOSE(E0, 1.4512, tol_digits(1.4512, 5), "PHYSICS 7.5: E0 = 1.4512 J");
+        }
+        CHECK_TRUE(c1 >= 2 && c1 == c2,
+                   TFMT("energy test goes through impacts (flexure %d: %d contacts)", flex, c2));
+        CHECK_TRUE(d2 <= 1e-7 * E0,
+                   TFMT("c_r = 1, no friction, conservative flexure %d: |E - E0| = %.2e J of %.4f J",
+                        flex, d2, E0));
+        CHECK_TRUE(d2 < 0.25 * d1,
+                   TFMT("energy error converges with the step (flexure %d: %.2e -> %.2e)", flex, d1, d2));
+    }
+}
+
+int main(void)
+{
+    test_defaults_prepare();
+    test_prepare_rejects();
+    test_counters();
+    test_derivatives();
+    test_events();
+    test_energy_conservation();
+    return TEST_SUMMARY();
+}
