@@ -19,4 +19,4 @@ echo "== Python tests"
 python3 -m pytest -q
 
 echo "== lint"
-python3 -m ruff check python tests modelDescription
+python3 -m ruff check python tests modelDescription benchmarks

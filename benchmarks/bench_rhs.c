@@ -1,0 +1,92 @@
+#define _POSIX_C_SOURCE 199309L
+/* Cost of one right-hand-side evaluation of the C model, and what switching parts off saves.
+ * All configurations are timed in the same run, interleaved and repeated; the report gives the
+ * median time per call and ratios to the full model. Build: cmake --build build --target
+ * bench_rhs; run: build/bench_rhs. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+
+#include "csfh_model.h"
+#include "csfh_variables.h"
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmp(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+typedef struct {
+    const char *name;
+    int law, flexure, friction;
+    double x[6]; /* state: in contact (gap < 0) or free */
+} config_t;
+
+int main(void)
+{
+    /* a state in contact with sliding (indentation 5e-5 m at -60 deg, v_T != 0) and a free one */
+    const double in_contact[6] = {0.5 * 0.02005, -0.8660254 * 0.02005, 0.01, 0.05, -0.02, 0.3};
+    const double free_state[6] = {0.005, 0.005, 0.01, 0.05, -0.02, 0.3};
+    const config_t configs[] = {
+        {"full: LN_spheres + friction + flexure, in contact", CSFH_CONTACTLAW_LN_SPHERES, 1, 1, {0}},
+        {"LN_ESDU (I3) + friction + flexure, in contact", CSFH_CONTACTLAW_LN_ESDU, 1, 1, {0}},
+        {"LN_spheres + friction, flexure off, in contact", CSFH_CONTACTLAW_LN_SPHERES, 0, 1, {0}},
+        {"LN_spheres, friction off, flexure off, in contact", CSFH_CONTACTLAW_LN_SPHERES, 0, 0, {0}},
+        {"full, free flight (gap > 0)", CSFH_CONTACTLAW_LN_SPHERES, 1, 1, {0}},
+        {"law none, flexure on", CSFH_CONTACTLAW_NONE, 1, 1, {0}},
+        {"law none, flexure off (gravity only)", CSFH_CONTACTLAW_NONE, 0, 0, {0}},
+    };
+    enum { NC = sizeof(configs) / sizeof(configs[0]), REPEATS = 15, CALLS = 200000 };
+    csfh_model_t models[NC];
+    double xs[NC][6];
+    for (int c = 0; c < NC; c++) {
+        csfh_model_set_defaults(&models[c]);
+        models[c].p.law = configs[c].law;
+        models[c].p.flexure_enabled = configs[c].flexure;
+        models[c].p.friction_enabled = configs[c].friction;
+        char msg[256];
+        if (csfh_model_prepare(&models[c], msg, sizeof msg) != 0) {
+            fprintf(stderr, "%s\n", msg);
+            return 1;
+        }
+        const double *x = c == 4 ? free_state : in_contact;
+        for (int i = 0; i < 6; i++) {
+            xs[c][i] = x[i];
+        }
+        models[c].z.in_contact = c != 4;
+        models[c].z.onset_speed = 0.5;
+    }
+    double samples[NC][REPEATS];
+    volatile double sink = 0.0;
+    for (int r = 0; r < REPEATS; r++) {
+        for (int c = 0; c < NC; c++) { /* interleaved: load changes hit all configurations */
+            double xdot[6];
+            const double t0 = now();
+            for (int k = 0; k < CALLS; k++) {
+                xs[c][5] += 1e-12; /* defeat hoisting */
+                csfh_model_derivatives(&models[c], xs[c], xdot);
+                sink += xdot[3];
+            }
+            samples[c][r] = (now() - t0) / CALLS;
+        }
+    }
+    double median[NC];
+    for (int c = 0; c < NC; c++) {
+        qsort(samples[c], REPEATS, sizeof(double), cmp);
+        median[c] = samples[c][REPEATS / 2];
+    }
+    printf("RHS cost of the C model (median of %d x %d calls)\n", REPEATS, CALLS);
+    printf("%-55s %10s %12s\n", "configuration", "ns/call", "vs full");
+    for (int c = 0; c < NC; c++) {
+        printf("%-55s %10.1f %12.3f\n", configs[c].name, 1e9 * median[c], median[c] / median[0]);
+    }
+    printf("target: full model <= 300 ns per call: %s\n", median[0] <= 300e-9 ? "met" : "NOT met");
+    return sink == 12345.0;
+}
