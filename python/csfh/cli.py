@@ -74,7 +74,14 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     return 0
 
 
+# Further commands live in their own modules; each defines register(subparsers), whose
+# sub-parsers set `func`. Adding a command is adding its module here.
+COMMAND_MODULES: tuple[str, ...] = ()
+
+
 def build_parser() -> argparse.ArgumentParser:
+    import importlib
+
     from . import model_info
 
     parser = argparse.ArgumentParser(
@@ -110,6 +117,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="the paper's four-model comparison on a scene")
     common(p)
     p.set_defaults(func=_cmd_compare)
+
+    for name in COMMAND_MODULES:
+        importlib.import_module(f".{name}", __package__).register(sub)
     return parser
 
 
