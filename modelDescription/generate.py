@@ -7,6 +7,16 @@ types, start values, ranges, units and the C storage of every variable. This scr
     <outdir>/modelDescription.xml
     <outdir>/csfh_variables.h    (value references, enumerations, GUID)
     <outdir>/csfh_variables.c    (the table the FMI glue and the core library use)
+    <outdir>/csfh_enums.h        (the enumerations as C enums)
+
+The same script serves every model of the repository (combdrive.toml: the comb-drive actuator).
+Optional keys of [model] name the C side; their defaults are the csfh model's:
+
+    c_prefix = "csfh"                 file names <prefix>_variables.h ..., macros <PREFIX>_...,
+                                      the table <prefix>_variables[]
+    c_struct = "csfh_model_t"         the C struct the table's offsets refer to
+    c_include = "csfh_model.h"        the header that declares it
+    log_events_description = "..."    description of the logEvents log category
 
 Usage: generate.py VARIABLES_TOML OUTDIR
 """
@@ -38,6 +48,19 @@ TYPE_C = {
     "Enumeration": "CSFH_TYPE_ENUMERATION",
 }
 STATES_DEFAULT = "states"
+LOG_EVENTS_DEFAULT = "Contact onsets and releases, mode changes"
+
+
+def c_names(spec: dict) -> tuple[str, str, str, str]:
+    """(prefix, PREFIX, struct, include) of the model's C side ([model] c_* keys, csfh default)."""
+    model = spec["model"]
+    prefix = model.get("c_prefix", "csfh")
+    return (
+        prefix,
+        prefix.upper(),
+        model.get("c_struct", "csfh_model_t"),
+        model.get("c_include", "csfh_model.h"),
+    )
 
 
 class SpecError(Exception):
@@ -158,7 +181,8 @@ def xml_model_description(spec: dict, guid: str) -> str:
             w(f'      <DisplayUnit name={quoteattr(d["name"])} factor="{d["factor"]!r}"/>')
         w("    </Unit>")
     w("  </UnitDefinitions>")
-    w("  <TypeDefinitions>")
+    if spec.get("enumerations"):  # the schema wants at least one SimpleType inside
+        w("  <TypeDefinitions>")
     for e in spec.get("enumerations", []):
         w(f"    <SimpleType name={quoteattr(e['name'])} description={quoteattr(e['description'])}>")
         w("      <Enumeration>")
@@ -169,9 +193,11 @@ def xml_model_description(spec: dict, guid: str) -> str:
             )
         w("      </Enumeration>")
         w("    </SimpleType>")
-    w("  </TypeDefinitions>")
+    if spec.get("enumerations"):
+        w("  </TypeDefinitions>")
     w("  <LogCategories>")
-    w('    <Category name="logEvents" description="Contact onsets and releases, mode changes"/>')
+    events = model.get("log_events_description", LOG_EVENTS_DEFAULT)
+    w(f'    <Category name="logEvents" description={quoteattr(events)}/>')
     w('    <Category name="logStatusWarning" description="Calls that return fmi2Warning"/>')
     w(
         '    <Category name="logStatusError" '
@@ -199,10 +225,11 @@ def xml_model_description(spec: dict, guid: str) -> str:
                 ta.append(f"{key}={quoteattr(v[key])}")
         if "range" in v:
             lo, hi, _, _ = parse_range(v["range"])
+            fmt_bound = (lambda x: str(int(x))) if v["type"] == "Integer" else fmt_xml_real
             if math.isfinite(lo):
-                ta.append(f'min="{fmt_xml_real(lo)}"')
+                ta.append(f'min="{fmt_bound(lo)}"')
             if math.isfinite(hi):
-                ta.append(f'max="{fmt_xml_real(hi)}"')
+                ta.append(f'max="{fmt_bound(hi)}"')
         if "nominal" in v:
             ta.append(f'nominal="{fmt_xml_real(v["nominal"])}"')
         if "derivative_of" in v:
@@ -226,17 +253,30 @@ def xml_model_description(spec: dict, guid: str) -> str:
     def dep_attr(names: list[str]) -> str:
         return " ".join(str(index[n]) for n in sorted(set(names), key=lambda n: index[n]))
 
+    def section(tag: str, unknowns: list[str]) -> None:
+        """<Outputs>, <Derivatives>: omitted when empty (the schema wants an Unknown inside)."""
+        if unknowns:
+            w(f"    <{tag}>")
+            out.extend(unknowns)
+            w(f"    </{tag}>")
+
     w("  <ModelStructure>")
-    w("    <Outputs>")
-    for v in variables:
-        if v["causality"] == "output":
-            w(f'      <Unknown index="{index[v["name"]]}" dependencies="{dep_attr(deps_of(v))}"/>')
-    w("    </Outputs>")
-    w("    <Derivatives>")
-    for v in variables:
-        if "derivative_of" in v:
-            w(f'      <Unknown index="{index[v["name"]]}" dependencies="{dep_attr(deps_of(v))}"/>')
-    w("    </Derivatives>")
+    section(
+        "Outputs",
+        [
+            f'      <Unknown index="{index[v["name"]]}" dependencies="{dep_attr(deps_of(v))}"/>'
+            for v in variables
+            if v["causality"] == "output"
+        ],
+    )
+    section(
+        "Derivatives",
+        [
+            f'      <Unknown index="{index[v["name"]]}" dependencies="{dep_attr(deps_of(v))}"/>'
+            for v in variables
+            if "derivative_of" in v
+        ],
+    )
     w("    <InitialUnknowns>")
     initial_unknowns = []
     for v in variables:
@@ -274,62 +314,65 @@ def xml_model_description(spec: dict, guid: str) -> str:
 # C
 
 
-def c_header(spec: dict, guid: str) -> str:
+def c_header(spec: dict, guid: str, source: str = "variables.toml") -> str:
+    prefix, P, _, _ = c_names(spec)
     out: list[str] = []
     w = out.append
-    w("/* Generated by modelDescription/generate.py from variables.toml. Do not edit. */")
-    w("#ifndef CSFH_VARIABLES_H")
-    w("#define CSFH_VARIABLES_H")
+    w(f"/* Generated by modelDescription/generate.py from {source}. Do not edit. */")
+    w(f"#ifndef {P}_VARIABLES_H")
+    w(f"#define {P}_VARIABLES_H")
     w("")
     w('#include "csfh_vartable.h"')
     w("")
-    w(f'#define CSFH_GUID "{guid}"')
-    w(f'#define CSFH_MODEL_IDENTIFIER "{spec["model"]["modelIdentifier"]}"')
-    w(f"#define CSFH_NUMBER_OF_STATES {sum(1 for v in spec['variables'] if v.get('state'))}")
-    w(f"#define CSFH_NUMBER_OF_EVENT_INDICATORS {spec['model']['numberOfEventIndicators']}")
-    w(f"#define CSFH_NUMBER_OF_VARIABLES {len(spec['variables'])}")
+    w(f'#define {P}_GUID "{guid}"')
+    w(f'#define {P}_MODEL_IDENTIFIER "{spec["model"]["modelIdentifier"]}"')
+    w(f"#define {P}_NUMBER_OF_STATES {sum(1 for v in spec['variables'] if v.get('state'))}")
+    w(f"#define {P}_NUMBER_OF_EVENT_INDICATORS {spec['model']['numberOfEventIndicators']}")
+    w(f"#define {P}_NUMBER_OF_VARIABLES {len(spec['variables'])}")
     w("")
     w("/* value references */")
     for v in spec["variables"]:
-        w(f"#define CSFH_VR_{c_ident(v['name'])} {v['vr']}u")
+        w(f"#define {P}_VR_{c_ident(v['name'])} {v['vr']}u")
     w("")
-    w("extern const csfh_variable_t csfh_variables[CSFH_NUMBER_OF_VARIABLES];")
+    w(f"extern const csfh_variable_t {prefix}_variables[{P}_NUMBER_OF_VARIABLES];")
     w("")
     w("#endif")
     return "\n".join(out) + "\n"
 
 
-def c_enums(spec: dict) -> str:
+def c_enums(spec: dict, source: str = "variables.toml") -> str:
+    prefix, P, _, _ = c_names(spec)
     out: list[str] = []
     w = out.append
-    w("/* Generated by modelDescription/generate.py from variables.toml. Do not edit. */")
-    w("#ifndef CSFH_ENUMS_H")
-    w("#define CSFH_ENUMS_H")
+    w(f"/* Generated by modelDescription/generate.py from {source}. Do not edit. */")
+    w(f"#ifndef {P}_ENUMS_H")
+    w(f"#define {P}_ENUMS_H")
     for e in spec.get("enumerations", []):
         w("")
         w(f"/* {e['description']} */")
         w("typedef enum {")
         for it in e["items"]:
-            item = f"CSFH_{c_ident(e['name'])}_{c_ident(it['name'])}"
+            item = f"{P}_{c_ident(e['name'])}_{c_ident(it['name'])}"
             w(f"    {item} = {it['value']}, /* {it['description']} */")
-        w(f"}} csfh_{re.sub(r'(?<!^)(?=[A-Z])', '_', e['name']).lower()}_t;")
-        w(f"#define CSFH_{c_ident(e['name'])}_COUNT {len(e['items'])}")
+        w(f"}} {prefix}_{re.sub(r'(?<!^)(?=[A-Z])', '_', e['name']).lower()}_t;")
+        w(f"#define {P}_{c_ident(e['name'])}_COUNT {len(e['items'])}")
     w("")
     w("#endif")
     return "\n".join(out) + "\n"
 
 
-def c_source(spec: dict) -> str:
+def c_source(spec: dict, source: str = "variables.toml") -> str:
+    prefix, P, struct, include = c_names(spec)
     enums = {e["name"]: e for e in spec.get("enumerations", [])}
     out: list[str] = []
     w = out.append
-    w("/* Generated by modelDescription/generate.py from variables.toml. Do not edit. */")
+    w(f"/* Generated by modelDescription/generate.py from {source}. Do not edit. */")
     w("#include <math.h>")
     w("#include <stddef.h>")
-    w('#include "csfh_model.h"')
-    w('#include "csfh_variables.h"')
+    w(f'#include "{include}"')
+    w(f'#include "{prefix}_variables.h"')
     w("")
-    w("const csfh_variable_t csfh_variables[CSFH_NUMBER_OF_VARIABLES] = {")
+    w(f"const csfh_variable_t {prefix}_variables[{P}_NUMBER_OF_VARIABLES] = {{")
     for v in spec["variables"]:
         field = v["field"]
         lo, hi, lo_open, hi_open, has_range = -math.inf, math.inf, 0, 0, 0
@@ -350,7 +393,7 @@ def c_source(spec: dict) -> str:
             "    {"
             f'{v["vr"]}u, "{v["name"]}", {TYPE_C[v["type"]]}, {CAUSALITY_C[v["causality"]]}, '
             f"{int(v['variability'] == 'tunable')}, {int(bool(v.get('state')))}, {storage}, "
-            f"offsetof(csfh_model_t, {field}), {1 if 'start' in v else 0}, {fmt_real(start)}, "
+            f"offsetof({struct}, {field}), {1 if 'start' in v else 0}, {fmt_real(start)}, "
             f"{has_range}, {fmt_real(lo)}, {fmt_real(hi)}, {int(lo_open)}, {int(hi_open)}, "
             f"{fmt_real(v.get('nominal', 1.0))}"
             "},"
@@ -371,11 +414,13 @@ def main(argv: list[str]) -> int:
         return 1
     guid = guid_of(spec)
     args.outdir.mkdir(parents=True, exist_ok=True)
+    prefix = c_names(spec)[0]
+    source = args.variables.name
     files = {
         "modelDescription.xml": xml_model_description(spec, guid),
-        "csfh_variables.h": c_header(spec, guid),
-        "csfh_enums.h": c_enums(spec),
-        "csfh_variables.c": c_source(spec),
+        f"{prefix}_variables.h": c_header(spec, guid, source),
+        f"{prefix}_enums.h": c_enums(spec, source),
+        f"{prefix}_variables.c": c_source(spec, source),
     }
     for name, text in files.items():
         path = args.outdir / name

@@ -6,7 +6,7 @@
 
 #include "csfh_variables.h"
 
-#define CSFH_ABI_VERSION 1
+#define CSFH_ABI_VERSION 2 /* 2: csfh_api_moreau_batch (csfh_moreau_batch.h) */
 
 int csfh_api_abi_version(void)
 {
@@ -181,4 +181,31 @@ int csfh_api_moreau_record_columns(void)
 int csfh_api_moreau_impact_columns(void)
 {
     return CSFH_MI_NCOLS;
+}
+
+int csfh_api_rk4_run(csfh_model_t *m, double h0, double tol, double h_min, double t0,
+                     const double x0[6], double t_end, double dt_out, double *records,
+                     size_t max_records, double *contacts, size_t max_contacts, double x_end[6],
+                     long long stats[5])
+{
+    const csfh_rk4_options_t o = {h0, tol, h_min};
+    csfh_rk4_stats_t s;
+    const int status = csfh_rk4_event_run(m, &o, t0, x0, t_end, dt_out, records, max_records,
+                                          contacts, max_contacts, x_end, &s);
+    stats[0] = s.steps;
+    stats[1] = s.rejected_steps;
+    stats[2] = s.rhs;
+    stats[3] = (long long)s.records;
+    stats[4] = (long long)s.contacts;
+    return status;
+}
+
+int csfh_api_rk4_record_columns(void)
+{
+    return CSFH_RK4_RECORD_NCOLS;
+}
+
+int csfh_api_contact_record_columns(void)
+{
+    return CSFH_CR_NCOLS;
 }

@@ -10,18 +10,6 @@
 #include "csfh_variables.h"
 
 
-/* Shortest "%g" text that reads back as the same double (0.3, not 0.29999999999999999). */
-static const char *fmt_value(char buf[32], double value)
-{
-    for (int precision = 6; precision <= 17; precision++) {
-        snprintf(buf, 32, "%.*g", precision, value);
-        if (strtod(buf, NULL) == value) {
-            break;
-        }
-    }
-    return buf;
-}
-
 const csfh_variable_t *csfh_variable_by_vr(unsigned int vr)
 {
     for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES; i++) {
@@ -71,34 +59,6 @@ void csfh_model_set_defaults(csfh_model_t *m)
     }
 }
 
-int csfh_check_value(const csfh_variable_t *v, double value, char *msg, size_t msg_size)
-{
-    if (!isfinite(value)) {
-        snprintf(msg, msg_size, "%s = %g is not finite", v->name, value);
-        return -1;
-    }
-    if (!v->has_range) {
-        return 0;
-    }
-    const int below = v->lo_open ? !(value > v->lo) : !(value >= v->lo);
-    const int above = v->hi_open ? !(value < v->hi) : !(value <= v->hi);
-    if (below || above) {
-        if (v->type == CSFH_TYPE_ENUMERATION) {
-            snprintf(msg, msg_size, "%s = %d is not a valid enumeration value (%g..%g)", v->name,
-                     (int)value, v->lo, v->hi);
-        } else if (v->type == CSFH_TYPE_BOOLEAN) {
-            snprintf(msg, msg_size, "%s = %d is not a Boolean (0 or 1)", v->name, (int)value);
-        } else {
-            char b1[32], b2[32], b3[32];
-            snprintf(msg, msg_size, "%s = %s is out of range %c%s, %s%c", v->name,
-                     fmt_value(b1, value), v->lo_open ? '(' : '[', fmt_value(b2, v->lo),
-                     fmt_value(b3, v->hi), v->hi_open ? ')' : ']');
-        }
-        return -1;
-    }
-    return 0;
-}
-
 static int check_all_values(csfh_model_t *m, char *msg, size_t msg_size)
 {
     for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES; i++) {
@@ -127,12 +87,12 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
     char b1[32], b2[32];
     if (!(p->R1 < p->R2)) {
         snprintf(msg, msg_size, "contact.R1 = %s must be smaller than contact.R2 = %s",
-                 fmt_value(b1, p->R1), fmt_value(b2, p->R2));
+                 csfh_format_value(b1, p->R1), csfh_format_value(b2, p->R2));
         return -1;
     }
     if (!(p->v1 > p->v0)) {
         snprintf(msg, msg_size, "friction.v1 = %s must be greater than friction.v0 = %s",
-                 fmt_value(b1, p->v1), fmt_value(b2, p->v0));
+                 csfh_format_value(b1, p->v1), csfh_format_value(b2, p->v0));
         return -1;
     }
     csfh_derived_t d;
@@ -282,10 +242,13 @@ int csfh_model_event_update(csfh_model_t *m)
         m->z.in_contact = 1;
         csfh_count(&m->z.contact_count);
         m->z.onset_speed = indentation_rate(m); /* pre-impact rate, used until release */
+        m->z.onset_time = m->time;
         return 1;
     }
     if (m->z.in_contact && gap >= eps) {
         m->z.in_contact = 0;
+        m->z.release_time = m->time;
+        m->z.release_speed = -indentation_rate(m);
         return 2;
     }
     return 0;
@@ -296,6 +259,8 @@ void csfh_model_init_discrete(csfh_model_t *m)
     m->z.in_contact = 0;
     m->z.contact_count = 0;
     m->z.onset_speed = 0.0;
+    m->z.onset_time = m->z.release_time = m->time; /* until a contact happens */
+    m->z.release_speed = 0.0;
     csfh_model_event_update(m);
 }
 

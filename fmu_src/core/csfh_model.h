@@ -54,6 +54,9 @@ typedef struct {
     int in_contact;       /* contact mode */
     int contact_count;    /* number of onsets */
     double onset_speed;   /* indentation rate captured at the onset, m/s (raw, floored at use) */
+    double onset_time;    /* time of the last onset, s */
+    double release_time;  /* time of the last release, s */
+    double release_speed; /* separation speed dg/dt at the last release, m/s */
 } csfh_discrete_t;
 
 typedef struct {
@@ -101,9 +104,7 @@ const csfh_variable_t *csfh_variable_by_name(const char *name);
 double *csfh_variable_real(csfh_model_t *m, const csfh_variable_t *v);
 int *csfh_variable_int(csfh_model_t *m, const csfh_variable_t *v);
 
-/* Check one value against the variable's range and finiteness. Returns 0 if valid, else writes
- * a message naming the variable and the value. */
-int csfh_check_value(const csfh_variable_t *v, double value, char *msg, size_t msg_size);
+/* csfh_check_value: see csfh_vartable.h */
 
 /* Validate every parameter (ranges, finiteness, cross-checks such as R1 < R2 and v0 < v1) and
  * compute the derived quantities. Returns 0 on success, -1 with a message otherwise (the derived
@@ -128,8 +129,8 @@ int csfh_model_derivatives(csfh_model_t *m, const double x[6], double xdot[6]);
  * right after an event (1 when the contact law is none: no events). */
 double csfh_model_event_indicator(const csfh_model_t *m, const double x[6]);
 
-/* Contact mode update at an event, from m->x. Returns 0 (no change), 1 (onset: the indentation
- * rate is captured) or 2 (release). */
+/* Contact mode update at an event, from m->x at m->time. Returns 0 (no change), 1 (onset: the
+ * indentation rate and the time are captured) or 2 (release: time and separation speed). */
 int csfh_model_event_update(csfh_model_t *m);
 
 /* Fill m->out (forces, gap, energies) at the current state. */

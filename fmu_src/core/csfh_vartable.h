@@ -44,4 +44,11 @@ typedef struct {
     double nominal;          /* nominal value (1 when none is declared) */
 } csfh_variable_t;
 
+/* Check one value against the variable's range and finiteness. Returns 0 if valid, else writes
+ * a message naming the variable and the value (csfh_vartable.c). */
+int csfh_check_value(const csfh_variable_t *v, double value, char *msg, size_t msg_size);
+
+/* Shortest "%g" text that reads back as the same double (0.3, not 0.29999999999999999). */
+const char *csfh_format_value(char buf[32], double value);
+
 #endif

@@ -1,8 +1,20 @@
 /* Co-simulation: fmi2DoStep integrates the model with SUNDIALS CVODE (BDF, dense direct linear
- * solver, difference-quotient Jacobian) and locates every contact onset and release inside the
- * step by root finding on the gap (the model-exchange event indicator). At each root the contact
- * mode is updated (the onset indentation rate is captured) and CVODE is re-initialised.
- * Inputs are held constant over the communication step. */
+ * solver, difference-quotient Jacobian) and locates every event inside the step by root finding
+ * on the model-exchange event indicators (csfh: the gap, so every contact onset and release). At
+ * each root the discrete state is updated (csfh: the onset indentation rate is captured) and
+ * CVODE is re-initialised; the step then continues to its end, however many events it holds.
+ *
+ * Inputs are held constant over the communication step (zero-order hold); a changed input value,
+ * a changed state or tunable parameter, and fmi2Get/SetFMUstate restart CVODE at the
+ * communication point, so that BDF never reaches across a discontinuity of the right-hand side.
+ * Tolerances: relative = the fmi2SetupExperiment tolerance (FMU_DEFAULT_TOLERANCE = 1e-6 when
+ * none is given), absolute = relative x the nominal value of each state.
+ *
+ * A CVODE failure returns fmi2Error with CVODE's own message and return flag in the log; the
+ * instance then holds the last state CVODE reached successfully, at that time (also reported by
+ * fmi2GetRealStatus(fmi2LastSuccessfulTime)); fmi2SetFMUstate can roll it back.
+ *
+ * A model without continuous states (the comb-drive actuator) just advances its time. */
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -15,11 +27,10 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
-#include "csfh_variables.h"
 #include "fmu_instance.h"
 
-#define NX CSFH_NUMBER_OF_STATES
-#define MAX_EVENTS_PER_STEP 1000000L  /* guards against an endless chain of contact events */
+#define NX fmu_model.n_states
+#define MAX_EVENTS_PER_STEP 1000000L  /* guards against an endless chain of events */
 #define MAX_STEPS_PER_CALL 500000L    /* CVODE steps per CVode() call */
 
 struct csfh_cvode {
@@ -37,16 +48,16 @@ static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
 {
     fmu_instance_t *inst = (fmu_instance_t *)user_data;
     (void)t;
-    const int status = csfh_model_derivatives(&inst->model, N_VGetArrayPointer(y),
-                                              N_VGetArrayPointer(ydot));
-    return status == CSFH_ERR_NONFINITE ? 1 : 0; /* recoverable: CVODE retries a smaller step */
+    const int status =
+        fmu_model.derivatives(inst->model, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+    return status == FMU_MODEL_NONFINITE ? 1 : 0; /* recoverable: CVODE retries a smaller step */
 }
 
 static int roots(sunrealtype t, N_Vector y, sunrealtype *gout, void *user_data)
 {
     fmu_instance_t *inst = (fmu_instance_t *)user_data;
     (void)t;
-    gout[0] = csfh_model_event_indicator(&inst->model, N_VGetArrayPointer(y));
+    fmu_model.event_indicators(inst->model, N_VGetArrayPointer(y), gout);
     return 0;
 }
 
@@ -96,7 +107,7 @@ static fmi2Status cv_check(fmu_instance_t *inst, int flag, const char *call)
     }
     char *name = CVodeGetReturnFlagName(flag);
     fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: %s failed with %s at t = %.17g", call,
-            name != NULL ? name : "an unknown flag", inst->model.time);
+            name != NULL ? name : "an unknown flag", *fmu_time(inst));
     free(name);
     return fmi2Error;
 }
@@ -110,9 +121,9 @@ static fmi2Status cs_start(fmu_instance_t *inst)
         cv = NULL;
     }
     if (cv != NULL) {
-        memcpy(N_VGetArrayPointer(cv->y), inst->model.x, NX * sizeof(double));
+        memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
         cv->counted_steps = 0;
-        return cv_check(inst, CVodeReInit(cv->mem, inst->model.time, cv->y), "CVodeReInit");
+        return cv_check(inst, CVodeReInit(cv->mem, *fmu_time(inst), cv->y), "CVodeReInit");
     }
     cv = (csfh_cvode_t *)calloc(1, sizeof(*cv));
     if (cv == NULL) {
@@ -136,21 +147,21 @@ static fmi2Status cs_start(fmu_instance_t *inst)
         return fmi2Error;
     }
     cv->LS = SUNLinSol_Dense(cv->y, cv->J, cv->ctx);
-    memcpy(N_VGetArrayPointer(cv->y), inst->model.x, NX * sizeof(double));
+    memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
     /* absolute tolerance: relative tolerance times the nominal value of each state */
     double *atol = N_VGetArrayPointer(cv->abstol);
     int k = 0;
-    for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES && k < NX; i++) {
-        if (csfh_variables[i].is_state) {
-            atol[k++] = inst->tolerance * csfh_variables[i].nominal;
+    for (int i = 0; i < fmu_model.n_variables && k < NX; i++) {
+        if (fmu_model.variables[i].is_state) {
+            atol[k++] = inst->tolerance * fmu_model.variables[i].nominal;
         }
     }
     fmi2Status s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
-    if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, inst->model.time, cv->y), "CVodeInit");
+    if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, *fmu_time(inst), cv->y), "CVodeInit");
     if (s == fmi2OK) s = cv_check(inst, CVodeSetUserData(cv->mem, inst), "CVodeSetUserData");
     if (s == fmi2OK) s = cv_check(inst, CVodeSVtolerances(cv->mem, inst->tolerance, cv->abstol), "CVodeSVtolerances");
     if (s == fmi2OK) s = cv_check(inst, CVodeSetLinearSolver(cv->mem, cv->LS, cv->J), "CVodeSetLinearSolver");
-    if (s == fmi2OK) s = cv_check(inst, CVodeRootInit(cv->mem, CSFH_NUMBER_OF_EVENT_INDICATORS, roots), "CVodeRootInit");
+    if (s == fmi2OK) s = cv_check(inst, CVodeRootInit(cv->mem, fmu_model.n_event_indicators, roots), "CVodeRootInit");
     if (s == fmi2OK) s = cv_check(inst, CVodeSetNoInactiveRootWarn(cv->mem), "CVodeSetNoInactiveRootWarn");
     if (s == fmi2OK) s = cv_check(inst, CVodeSetMaxNumSteps(cv->mem, MAX_STEPS_PER_CALL), "CVodeSetMaxNumSteps");
     if (s != fmi2OK) {
@@ -167,23 +178,45 @@ static void count_steps(fmu_instance_t *inst)
     CVodeGetNumSteps(cv->mem, &nsteps);
     const long added = nsteps - cv->counted_steps;
     cv->counted_steps = nsteps;
-    const long room = (long)INT_MAX - inst->model.counters.steps;
-    inst->model.counters.steps += (int)(added < room ? added : room);
+    if (fmu_model.add_integrator_steps != NULL) {
+        fmu_model.add_integrator_steps(inst->model, added);
+    }
+}
+
+/* Take CVODE's solution (tret, y) as the model's time and state. */
+static void take_solution(fmu_instance_t *inst, double tret)
+{
+    memcpy(fmu_states(inst), N_VGetArrayPointer(inst->cvode->y), NX * sizeof(double));
+    *fmu_time(inst) = tret;
+    fmu_invalidate(inst);
+}
+
+/* The step ends at t_end: evaluate the outputs once (a model warning is logged once, a
+ * non-finite output is an error). */
+static fmi2Status finish_step(fmu_instance_t *inst, double t_end, fmi2Status status)
+{
+    *fmu_time(inst) = t_end; /* exact communication point (tret == t_end up to round-off) */
+    fmu_invalidate(inst);
+    const fmi2Status s = fmu_update_outputs(inst, "fmi2DoStep");
+    return s > status ? s : status;
 }
 
 fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
 {
-    csfh_model_t *m = &inst->model;
-    if (fabs(t - m->time) > 1e-9 * (1.0 + fabs(t))) {
+    const double now = *fmu_time(inst);
+    if (fabs(t - now) > 1e-9 * (1.0 + fabs(t))) {
         fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
                 "fmi2DoStep: currentCommunicationPoint = %.17g does not match the FMU time %.17g",
-                t, m->time);
+                t, now);
         return fmi2Error;
     }
     if (h == 0.0) {
         return fmi2OK;
     }
     const double t_end = t + h;
+    if (NX == 0) {
+        return finish_step(inst, t_end, fmi2OK); /* no continuous states: nothing to integrate */
+    }
     if (inst->cvode == NULL || inst->cvode_needs_reinit) {
         if (cs_start(inst) != fmi2OK) {
             return fmi2Error;
@@ -195,47 +228,51 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
         return fmi2Error;
     }
     long events = 0;
-    double tret = m->time;
-    fmi2Status status = fmi2OK;
+    double tret = now;
     while (tret < t_end) {
         const int flag = CVode(cv->mem, t_end, cv->y, &tret, CV_NORMAL);
         count_steps(inst);
         if (flag < 0) {
-            memcpy(m->x, N_VGetArrayPointer(cv->y), NX * sizeof(double));
-            fmu_invalidate(inst);
+            /* CVODE's message is already in the log (error_handler); add the flag. CVODE returns
+             * the last successful point in (tret, y): keep it, so that what the master reads is
+             * consistent (time, state, discrete state), never a half-taken step. */
             cv_check(inst, flag, "CVode");
+            const double *y = N_VGetArrayPointer(cv->y);
+            int finite = isfinite(tret) && tret >= now && tret <= t_end;
+            for (int i = 0; i < NX; i++) {
+                finite = finite && isfinite(y[i]);
+            }
+            if (finite) {
+                take_solution(inst, tret);
+            }
+            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
+                    "fmi2DoStep: the step from t = %.17g to %.17g failed; the FMU holds the last "
+                    "successful state, at t = %.17g",
+                    t, t_end, *fmu_time(inst));
             inst->cvode_needs_reinit = 1;
             return fmi2Error;
         }
-        memcpy(m->x, N_VGetArrayPointer(cv->y), NX * sizeof(double));
-        m->time = tret;
-        fmu_invalidate(inst);
-        if (!inst->warned_esdu && csfh_model_outputs(m) == CSFH_WARN_ESDU_CLAMPED) {
-            inst->warned_esdu = 1;
-            fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING,
-                    "fmi2DoStep: indentation beyond the validity of the ESDU law; the force is "
-                    "held at contact.esdu_F_max = %g N", m->d.esdu_F_max);
-            status = fmi2Warning;
-        }
+        take_solution(inst, tret);
         if (flag == CV_ROOT_RETURN) {
             if (++events > MAX_EVENTS_PER_STEP) {
                 fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
-                        "fmi2DoStep: more than %ld contact events in one step at t = %.17g",
+                        "fmi2DoStep: more than %ld events in one step at t = %.17g",
                         MAX_EVENTS_PER_STEP, tret);
+                inst->cvode_needs_reinit = 1;
                 return fmi2Error;
             }
             if (fmu_event_update(inst) != 0) {
-                /* the indicator switched branch: restart the integrator at the event */
+                /* the discrete state changed: restart the integrator at the event */
                 cv->counted_steps = 0;
                 if (cv_check(inst, CVodeReInit(cv->mem, tret, cv->y), "CVodeReInit") != fmi2OK ||
                     cv_check(inst, CVodeSetStopTime(cv->mem, t_end), "CVodeSetStopTime") != fmi2OK) {
+                    inst->cvode_needs_reinit = 1;
                     return fmi2Error;
                 }
             }
         }
     }
-    m->time = t_end; /* exact communication point (tret == t_end up to round-off) */
-    return status;
+    return finish_step(inst, t_end, fmi2OK);
 }
 
 fmi2Status cs_reset(fmu_instance_t *inst)

@@ -1,5 +1,7 @@
 /* FMI 2.0 glue: instance life cycle, state machine, get/set through the generated variable table,
- * model-exchange functions and FMU state handling. The physics is in ../core. */
+ * model-exchange functions and FMU state handling. Model-independent: the model is behind the
+ * interface of fmu_model.h (csfh: csfh_fmu_model.c, physics in ../core; the comb-drive actuator:
+ * ../combdrive/). */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -7,7 +9,6 @@
 #include <string.h>
 
 #include "fmu_instance.h"
-#include "csfh_variables.h"
 
 #define MSG_SIZE 512
 
@@ -113,7 +114,7 @@ static fmi2Status prepare(fmu_instance_t *inst, const char *function)
         return fmi2OK;
     }
     char msg[MSG_SIZE];
-    if (csfh_model_prepare(&inst->model, msg, sizeof(msg)) != 0) {
+    if (fmu_model.prepare(inst->model, msg, sizeof(msg)) != 0) {
         LOG_ERROR(inst, "%s: %s", function, msg);
         return fmi2Error;
     }
@@ -121,44 +122,34 @@ static fmi2Status prepare(fmu_instance_t *inst, const char *function)
     return fmi2OK;
 }
 
-static fmi2Status report_law_status(fmu_instance_t *inst, int status, const char *function)
-{
-    if (status == CSFH_WARN_ESDU_CLAMPED) {
-        if (!inst->warned_esdu) {
-            inst->warned_esdu = 1;
-            fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING,
-                    "%s: indentation beyond the validity of the ESDU law (4 (R2 - R1)); the "
-                    "force is held at contact.esdu_F_max = %g N",
-                    function, inst->model.d.esdu_F_max);
-        }
-        return fmi2Warning;
-    }
-    return fmi2OK;
-}
-
 static fmi2Status update_derivatives(fmu_instance_t *inst, const char *function)
 {
-    if (inst->derivatives_valid) {
+    if (inst->derivatives_valid || fmu_model.n_states == 0) {
         return fmi2OK;
     }
     if (prepare(inst, function) != fmi2OK) {
         return fmi2Error;
     }
-    const int status = csfh_model_derivatives(&inst->model, inst->model.x, inst->model.der);
-    if (status == CSFH_ERR_NONFINITE) {
-        const double *x = inst->model.x;
-        LOG_ERROR(inst,
-                  "%s: non-finite derivative at t = %.17g, state [%g, %g, %g, %g, %g, %g]",
-                  function, inst->model.time, x[0], x[1], x[2], x[3], x[4], x[5]);
+    double *x = fmu_states(inst);
+    const int status = fmu_model.derivatives(inst->model, x, fmu_derivatives(inst));
+    if (status == FMU_MODEL_NONFINITE) {
+        char text[MSG_SIZE];
+        size_t k = 0;
+        text[0] = '\0';
+        for (int i = 0; i < fmu_model.n_states && k + 1 < sizeof(text); i++) {
+            k += (size_t)snprintf(text + k, sizeof(text) - k, "%s%g", i ? ", " : "", x[i]);
+        }
+        LOG_ERROR(inst, "%s: non-finite derivative at t = %.17g, state [%s]", function,
+                  *fmu_time(inst), text);
         return fmi2Error;
     }
     inst->derivatives_valid = 1;
-    /* no ESDU warning here: integrators probe trial states far inside the contact; the warning
-     * comes from the outputs, which are evaluated at accepted states */
+    /* no model warning here: integrators probe trial states (e.g. far inside a contact); the
+     * warning comes from the outputs, which are evaluated at accepted states */
     return fmi2OK;
 }
 
-static fmi2Status update_outputs(fmu_instance_t *inst, const char *function)
+fmi2Status fmu_update_outputs(fmu_instance_t *inst, const char *function)
 {
     if (inst->outputs_valid) {
         return fmi2OK;
@@ -166,29 +157,34 @@ static fmi2Status update_outputs(fmu_instance_t *inst, const char *function)
     if (prepare(inst, function) != fmi2OK) {
         return fmi2Error;
     }
-    const int status = csfh_model_outputs(&inst->model);
-    const csfh_outputs_t *o = &inst->model.out;
-    const double values[] = {o->F_N, o->F_T, o->indentation, o->gap, o->v_T,
-                             o->indentation_rate, o->E_total};
-    for (size_t i = 0; i < sizeof(values) / sizeof(values[0]); i++) {
-        if (!isfinite(values[i])) {
-            LOG_ERROR(inst, "%s: non-finite output at t = %.17g", function, inst->model.time);
-            return fmi2Error;
-        }
+    char msg[MSG_SIZE];
+    msg[0] = '\0';
+    const int status = fmu_model.outputs(inst->model, msg, sizeof(msg));
+    if (status == FMU_MODEL_NONFINITE) {
+        LOG_ERROR(inst, "%s: %s", function, msg);
+        return fmi2Error;
     }
     inst->outputs_valid = 1;
-    return report_law_status(inst, status, function);
+    if (status == FMU_MODEL_WARNING) {
+        if (!inst->warned_outputs) {
+            inst->warned_outputs = 1;
+            fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING, "%s: %s", function, msg);
+        }
+        return fmi2Warning;
+    }
+    return fmi2OK;
 }
 
 int fmu_event_update(fmu_instance_t *inst)
 {
-    const int change = csfh_model_event_update(&inst->model);
-    if (change == 1) {
-        fmu_log(inst, fmi2OK, LOG_EVENTS,
-                "t = %.17g: contact %d starts, onset indentation rate %g m/s", inst->model.time,
-                inst->model.z.contact_count, inst->model.z.onset_speed);
-    } else if (change == 2) {
-        fmu_log(inst, fmi2OK, LOG_EVENTS, "t = %.17g: contact ends", inst->model.time);
+    if (fmu_model.n_event_indicators == 0) {
+        return 0;
+    }
+    char msg[MSG_SIZE];
+    msg[0] = '\0';
+    const int change = fmu_model.event_update(inst->model, msg, sizeof(msg));
+    if (msg[0] != '\0') {
+        fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", msg);
     }
     if (change != 0) {
         fmu_invalidate(inst);
@@ -260,7 +256,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     (void)visible;
     fmi2CallbackLogger logger = functions != NULL ? functions->logger : NULL;
     fmi2ComponentEnvironment env = functions != NULL ? functions->componentEnvironment : NULL;
-    const char *name = instanceName != NULL ? instanceName : "csfh";
+    const char *name = instanceName != NULL ? instanceName : fmu_model.model_identifier;
     if (instanceName == NULL || instanceName[0] == '\0') {
         if (logger) {
             logger(env, name, fmi2Error, "logStatusError",
@@ -268,10 +264,13 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         }
         return NULL;
     }
-    if (fmuGUID == NULL || strcmp(fmuGUID, CSFH_GUID) != 0) {
+    if (fmuGUID == NULL || strcmp(fmuGUID, fmu_model.guid) != 0) {
         if (logger) {
-            logger(env, name, fmi2Error, "logStatusError",
-                   "fmi2Instantiate: fmuGUID does not match this binary (expected " CSFH_GUID ")");
+            char msg[MSG_SIZE];
+            snprintf(msg, sizeof(msg),
+                     "fmi2Instantiate: fmuGUID does not match this binary (expected %s)",
+                     fmu_model.guid);
+            logger(env, name, fmi2Error, "logStatusError", msg);
         }
         return NULL;
     }
@@ -286,7 +285,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return NULL;
     }
     inst->instance_name = (char *)malloc(strlen(instanceName) + 1);
-    if (inst->instance_name == NULL) {
+    inst->model = calloc(1, fmu_model.size);
+    if (inst->instance_name == NULL || inst->model == NULL) {
+        free(inst->instance_name);
+        free(inst->model);
         free(inst);
         return NULL;
     }
@@ -298,9 +300,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     if (loggingOn) {
         inst->log_categories |= LOG_EVENTS | LOG_ALL;
     }
-    csfh_model_set_defaults(&inst->model);
+    fmu_model.set_defaults(inst->model);
     inst->state = FMU_INSTANTIATED;
-    inst->tolerance = 1e-6;
+    inst->tolerance = FMU_DEFAULT_TOLERANCE;
     return inst;
 }
 
@@ -311,6 +313,7 @@ void fmi2FreeInstance(fmi2Component c)
         return;
     }
     cs_free(inst);
+    free(inst->model);
     free(inst->instance_name);
     free(inst);
 }
@@ -342,7 +345,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     inst->start_time = startTime;
     inst->stop_time = stopTime;
     inst->stop_time_defined = stopTimeDefined ? 1 : 0;
-    inst->model.time = startTime;
+    *fmu_time(inst) = startTime;
     return fmi2OK;
 }
 
@@ -366,10 +369,12 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     if (prepare(inst, "fmi2ExitInitializationMode") != fmi2OK) {
         return fmi2Error;
     }
-    csfh_model_init_discrete(&inst->model);
+    char msg[MSG_SIZE];
+    msg[0] = '\0';
+    fmu_model.init_discrete(inst->model, msg, sizeof(msg));
     fmu_invalidate(inst);
-    if (inst->model.z.in_contact) {
-        fmu_log(inst, fmi2OK, LOG_EVENTS, "t = %.17g: starts in contact", inst->model.time);
+    if (msg[0] != '\0') {
+        fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", msg);
     }
     inst->cvode_needs_reinit = 1;
     inst->state = inst->type == fmi2ModelExchange ? FMU_EVENT : FMU_STEP_COMPLETE;
@@ -394,10 +399,10 @@ fmi2Status fmi2Reset(fmi2Component c)
         return fmi2Error;
     }
     cs_free(inst);
-    csfh_model_set_defaults(&inst->model);
+    fmu_model.set_defaults(inst->model);
     inst->prepared = 0;
-    inst->warned_esdu = 0;
-    inst->tolerance = 1e-6;
+    inst->warned_outputs = 0;
+    inst->tolerance = FMU_DEFAULT_TOLERANCE;
     inst->start_time = 0.0;
     inst->stop_time_defined = 0;
     fmu_invalidate(inst);
@@ -417,7 +422,13 @@ fmi2Status fmi2Reset(fmi2Component c)
 static const csfh_variable_t *lookup(fmu_instance_t *inst, const char *function, fmi2ValueReference vr,
                                      csfh_type_t type)
 {
-    const csfh_variable_t *v = csfh_variable_by_vr(vr);
+    const csfh_variable_t *v = NULL;
+    for (int i = 0; i < fmu_model.n_variables; i++) {
+        if (fmu_model.variables[i].vr == vr) {
+            v = &fmu_model.variables[i];
+            break;
+        }
+    }
     const int type_ok = v != NULL && (v->type == type ||
                                       (type == CSFH_TYPE_INTEGER && v->type == CSFH_TYPE_ENUMERATION));
     if (!type_ok) {
@@ -425,6 +436,16 @@ static const csfh_variable_t *lookup(fmu_instance_t *inst, const char *function,
         return NULL;
     }
     return v;
+}
+
+static double *real_of(fmu_instance_t *inst, const csfh_variable_t *v)
+{
+    return (double *)((char *)inst->model + v->offset);
+}
+
+static int *int_of(fmu_instance_t *inst, const csfh_variable_t *v)
+{
+    return (int *)((char *)inst->model + v->offset);
 }
 
 /* Bring computed values up to date before they are read. */
@@ -436,11 +457,11 @@ static fmi2Status refresh(fmu_instance_t *inst, const csfh_variable_t *v, const 
     if (v->storage != CSFH_STORE_COMPUTED) {
         return fmi2OK;
     }
-    if (v->offset >= offsetof(csfh_model_t, der) &&
-        v->offset < offsetof(csfh_model_t, der) + sizeof(inst->model.der)) {
+    if (v->offset >= fmu_model.der_offset &&
+        v->offset < fmu_model.der_offset + (size_t)fmu_model.n_states * sizeof(double)) {
         return update_derivatives(inst, function);
     }
-    return update_outputs(inst, function);
+    return fmu_update_outputs(inst, function);
 }
 
 static fmi2Status get_values(fmu_instance_t *inst, const char *function,
@@ -465,11 +486,11 @@ static fmi2Status get_values(fmu_instance_t *inst, const char *function,
         }
         status = s > status ? s : status;
         if (type == CSFH_TYPE_REAL) {
-            ((fmi2Real *)value)[i] = *csfh_variable_real(&inst->model, v);
+            ((fmi2Real *)value)[i] = *real_of(inst, v);
         } else if (type == CSFH_TYPE_BOOLEAN) {
-            ((fmi2Boolean *)value)[i] = *csfh_variable_int(&inst->model, v) ? fmi2True : fmi2False;
+            ((fmi2Boolean *)value)[i] = *int_of(inst, v) ? fmi2True : fmi2False;
         } else {
-            ((fmi2Integer *)value)[i] = *csfh_variable_int(&inst->model, v);
+            ((fmi2Integer *)value)[i] = *int_of(inst, v);
         }
     }
     return status;
@@ -533,29 +554,41 @@ static fmi2Status set_values(fmu_instance_t *inst, const char *function,
         }
         if (v->causality == CSFH_CAUS_PARAMETER && !(inst->state & (FMU_INSTANTIATED | FMU_INITIALIZATION))) {
             /* a tunable parameter while running: apply, re-validate, roll back on failure */
-            csfh_model_t saved = inst->model;
-            if (type == CSFH_TYPE_REAL) {
-                *csfh_variable_real(&inst->model, v) = x;
-            } else {
-                *csfh_variable_int(&inst->model, v) = (int)x;
+            void *saved = malloc(fmu_model.size);
+            if (saved == NULL) {
+                LOG_ERROR(inst, "%s: out of memory", function);
+                return fmi2Error;
             }
-            if (csfh_model_prepare(&inst->model, msg, sizeof(msg)) != 0) {
-                inst->model = saved;
+            memcpy(saved, inst->model, fmu_model.size);
+            if (type == CSFH_TYPE_REAL) {
+                *real_of(inst, v) = x;
+            } else {
+                *int_of(inst, v) = (int)x;
+            }
+            const int failed = fmu_model.prepare(inst->model, msg, sizeof(msg)) != 0;
+            if (failed) {
+                memcpy(inst->model, saved, fmu_model.size);
+            }
+            free(saved);
+            if (failed) {
                 LOG_ERROR(inst, "%s: %s", function, msg);
                 return fmi2Error;
             }
             tunable_changed = 1;
             continue;
         }
+        const double old = type == CSFH_TYPE_REAL ? *real_of(inst, v) : (double)*int_of(inst, v);
         if (type == CSFH_TYPE_REAL) {
-            *csfh_variable_real(&inst->model, v) = x;
+            *real_of(inst, v) = x;
         } else {
-            *csfh_variable_int(&inst->model, v) = (int)x;
+            *int_of(inst, v) = (int)x;
         }
         if (v->causality == CSFH_CAUS_PARAMETER) {
             inst->prepared = 0;
         }
-        if (v->is_state) {
+        /* a new state, or a new input value (inputs are held constant over a communication step,
+         * so a change is a discontinuity of the right-hand side): restart the CS integrator */
+        if (v->is_state || (v->causality == CSFH_CAUS_INPUT && old != x)) {
             inst->cvode_needs_reinit = 1;
         }
     }
@@ -638,38 +671,45 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 /* FMU state */
 
 #define FMU_STATE_MAGIC 0x48465343u /* "CSFH" */
-#define FMU_STATE_VERSION 1u
+#define FMU_STATE_VERSION 2u
 
+/* An FMU state: this header, then the model struct (fmu_model.size bytes). */
 typedef struct {
     unsigned int magic;
     unsigned int version;
-    unsigned int size;
+    unsigned int size; /* of the whole snapshot */
     char guid[40];
     fmi2Type type;
     fmu_state_t state;
     int prepared;
-    int warned_esdu;
-    csfh_model_t model;
+    int warned_outputs;
+    unsigned char model[];
 } fmu_snapshot_t;
+
+static size_t snapshot_size(void)
+{
+    return sizeof(fmu_snapshot_t) + fmu_model.size;
+}
 
 static void snapshot_take(const fmu_instance_t *inst, fmu_snapshot_t *s)
 {
-    memset(s, 0, sizeof(*s));
+    memset(s, 0, snapshot_size());
     s->magic = FMU_STATE_MAGIC;
     s->version = FMU_STATE_VERSION;
-    s->size = (unsigned int)sizeof(*s);
-    strncpy(s->guid, CSFH_GUID, sizeof(s->guid) - 1);
+    s->size = (unsigned int)snapshot_size();
+    strncpy(s->guid, fmu_model.guid, sizeof(s->guid) - 1);
     s->type = inst->type;
     s->state = inst->state;
     s->prepared = inst->prepared;
-    s->warned_esdu = inst->warned_esdu;
-    s->model = inst->model;
+    s->warned_outputs = inst->warned_outputs;
+    memcpy(s->model, inst->model, fmu_model.size);
 }
 
+/* Is the header that of a state of this FMU? (Only the header is read.) */
 static int snapshot_valid(const fmu_snapshot_t *s)
 {
     return s->magic == FMU_STATE_MAGIC && s->version == FMU_STATE_VERSION &&
-           s->size == sizeof(*s) && strncmp(s->guid, CSFH_GUID, sizeof(s->guid)) == 0;
+           s->size == snapshot_size() && strncmp(s->guid, fmu_model.guid, sizeof(s->guid)) == 0;
 }
 
 /* A state can only be restored into an instance of the same kind (ME or CS). */
@@ -694,8 +734,8 @@ static void snapshot_restore(fmu_instance_t *inst, const fmu_snapshot_t *s)
 {
     inst->state = s->state;
     inst->prepared = s->prepared;
-    inst->warned_esdu = s->warned_esdu;
-    inst->model = s->model;
+    inst->warned_outputs = s->warned_outputs;
+    memcpy(inst->model, s->model, fmu_model.size);
     inst->cvode_needs_reinit = 1;
     fmu_invalidate(inst);
 }
@@ -713,7 +753,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     }
     fmu_snapshot_t *s = (fmu_snapshot_t *)*FMUstate;
     if (s == NULL) {
-        s = (fmu_snapshot_t *)calloc(1, sizeof(*s));
+        s = (fmu_snapshot_t *)calloc(1, snapshot_size());
         if (s == NULL) {
             LOG_ERROR(inst, "fmi2GetFMUstate: out of memory");
             return fmi2Error;
@@ -769,7 +809,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, si
         !not_null(inst, "fmi2SerializedFMUstateSize", size, "size")) {
         return fmi2Error;
     }
-    *size = sizeof(fmu_snapshot_t);
+    *size = snapshot_size();
     return fmi2OK;
 }
 
@@ -782,12 +822,12 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
         !not_null(inst, "fmi2SerializeFMUstate", serializedState, "serializedState")) {
         return fmi2Error;
     }
-    if (size < sizeof(fmu_snapshot_t)) {
+    if (size < snapshot_size()) {
         LOG_ERROR(inst, "fmi2SerializeFMUstate: size = %zu is smaller than %zu", size,
-                  sizeof(fmu_snapshot_t));
+                  snapshot_size());
         return fmi2Error;
     }
-    memcpy(serializedState, FMUstate, sizeof(fmu_snapshot_t));
+    memcpy(serializedState, FMUstate, snapshot_size());
     return fmi2OK;
 }
 
@@ -800,22 +840,22 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
         !not_null(inst, "fmi2DeSerializeFMUstate", FMUstate, "FMUstate")) {
         return fmi2Error;
     }
-    fmu_snapshot_t tmp;
-    if (size != sizeof(tmp)) {
-        LOG_ERROR(inst, "fmi2DeSerializeFMUstate: size = %zu, expected %zu", size, sizeof(tmp));
+    fmu_snapshot_t header;
+    if (size != snapshot_size()) {
+        LOG_ERROR(inst, "fmi2DeSerializeFMUstate: size = %zu, expected %zu", size, snapshot_size());
         return fmi2Error;
     }
-    memcpy(&tmp, serializedState, sizeof(tmp));
-    if (!snapshot_valid(&tmp)) {
+    memcpy(&header, serializedState, sizeof(header));
+    if (!snapshot_valid(&header)) {
         LOG_ERROR(inst, "fmi2DeSerializeFMUstate: the bytes are not a state of this FMU");
         return fmi2Error;
     }
-    fmu_snapshot_t *s = (fmu_snapshot_t *)calloc(1, sizeof(*s));
+    fmu_snapshot_t *s = (fmu_snapshot_t *)calloc(1, snapshot_size());
     if (s == NULL) {
         LOG_ERROR(inst, "fmi2DeSerializeFMUstate: out of memory");
         return fmi2Error;
     }
-    *s = tmp;
+    memcpy(s, serializedState, snapshot_size());
     *FMUstate = s;
     return fmi2OK;
 }
@@ -917,7 +957,7 @@ fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
         LOG_ERROR(inst, "fmi2SetTime: time = %g is not finite", time);
         return fmi2Error;
     }
-    inst->model.time = time;
+    *fmu_time(inst) = time;
     fmu_invalidate(inst);
     return fmi2OK;
 }
@@ -930,18 +970,20 @@ fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n
         !not_null(inst, "fmi2SetContinuousStates", x, "x")) {
         return fmi2Error;
     }
-    if (nx != CSFH_NUMBER_OF_STATES) {
-        LOG_ERROR(inst, "fmi2SetContinuousStates: nx = %zu, expected %d", nx, CSFH_NUMBER_OF_STATES);
+    if (nx != (size_t)fmu_model.n_states) {
+        LOG_ERROR(inst, "fmi2SetContinuousStates: nx = %zu, expected %d", nx, fmu_model.n_states);
         return fmi2Error;
     }
     for (size_t i = 0; i < nx; i++) {
         if (!isfinite(x[i])) {
             LOG_ERROR(inst, "fmi2SetContinuousStates: x[%zu] = %g is not finite (t = %.17g)", i,
-                      x[i], inst->model.time);
+                      x[i], *fmu_time(inst));
             return fmi2Error;
         }
     }
-    memcpy(inst->model.x, x, nx * sizeof(double));
+    if (nx > 0) {
+        memcpy(fmu_states(inst), x, nx * sizeof(double));
+    }
     fmu_invalidate(inst);
     return fmi2OK;
 }
@@ -953,15 +995,17 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx
         !not_null(inst, "fmi2GetDerivatives", derivatives, "derivatives")) {
         return fmi2Error;
     }
-    if (nx != CSFH_NUMBER_OF_STATES) {
-        LOG_ERROR(inst, "fmi2GetDerivatives: nx = %zu, expected %d", nx, CSFH_NUMBER_OF_STATES);
+    if (nx != (size_t)fmu_model.n_states) {
+        LOG_ERROR(inst, "fmi2GetDerivatives: nx = %zu, expected %d", nx, fmu_model.n_states);
         return fmi2Error;
     }
     const fmi2Status status = update_derivatives(inst, "fmi2GetDerivatives");
     if (status > fmi2Warning) {
         return status;
     }
-    memcpy(derivatives, inst->model.der, nx * sizeof(double));
+    if (nx > 0) {
+        memcpy(derivatives, fmu_derivatives(inst), nx * sizeof(double));
+    }
     return status;
 }
 
@@ -973,15 +1017,17 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], s
         !not_null(inst, "fmi2GetEventIndicators", eventIndicators, "eventIndicators")) {
         return fmi2Error;
     }
-    if (ni != CSFH_NUMBER_OF_EVENT_INDICATORS) {
+    if (ni != (size_t)fmu_model.n_event_indicators) {
         LOG_ERROR(inst, "fmi2GetEventIndicators: ni = %zu, expected %d", ni,
-                  CSFH_NUMBER_OF_EVENT_INDICATORS);
+                  fmu_model.n_event_indicators);
         return fmi2Error;
     }
     if (prepare(inst, "fmi2GetEventIndicators") != fmi2OK) {
         return fmi2Error;
     }
-    eventIndicators[0] = csfh_model_event_indicator(&inst->model, inst->model.x);
+    if (ni > 0) {
+        fmu_model.event_indicators(inst->model, fmu_states(inst), eventIndicators);
+    }
     return fmi2OK;
 }
 
@@ -993,11 +1039,13 @@ fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
         !not_null(inst, "fmi2GetContinuousStates", x, "x")) {
         return fmi2Error;
     }
-    if (nx != CSFH_NUMBER_OF_STATES) {
-        LOG_ERROR(inst, "fmi2GetContinuousStates: nx = %zu, expected %d", nx, CSFH_NUMBER_OF_STATES);
+    if (nx != (size_t)fmu_model.n_states) {
+        LOG_ERROR(inst, "fmi2GetContinuousStates: nx = %zu, expected %d", nx, fmu_model.n_states);
         return fmi2Error;
     }
-    memcpy(x, inst->model.x, nx * sizeof(double));
+    if (nx > 0) {
+        memcpy(x, fmu_states(inst), nx * sizeof(double));
+    }
     return fmi2OK;
 }
 
@@ -1009,15 +1057,15 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal
         !not_null(inst, "fmi2GetNominalsOfContinuousStates", x_nominal, "x_nominal")) {
         return fmi2Error;
     }
-    if (nx != CSFH_NUMBER_OF_STATES) {
+    if (nx != (size_t)fmu_model.n_states) {
         LOG_ERROR(inst, "fmi2GetNominalsOfContinuousStates: nx = %zu, expected %d", nx,
-                  CSFH_NUMBER_OF_STATES);
+                  fmu_model.n_states);
         return fmi2Error;
     }
     size_t k = 0;
-    for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES && k < nx; i++) {
-        if (csfh_variables[i].is_state) {
-            x_nominal[k++] = csfh_variables[i].nominal;
+    for (int i = 0; i < fmu_model.n_variables && k < nx; i++) {
+        if (fmu_model.variables[i].is_state) {
+            x_nominal[k++] = fmu_model.variables[i].nominal;
         }
     }
     return fmi2OK;
@@ -1116,7 +1164,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
 {
     fmu_instance_t *inst = (fmu_instance_t *)c;
     if (inst != NULL && value != NULL && s == fmi2LastSuccessfulTime) {
-        *value = inst->model.time;
+        *value = *fmu_time(inst);
         return fmi2OK;
     }
     return get_status(c, "fmi2GetRealStatus");

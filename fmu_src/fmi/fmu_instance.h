@@ -1,11 +1,11 @@
-/* The FMU instance shared by the FMI glue (fmi2_glue.c) and the co-simulation stepper
- * (cosimulation.c). */
+/* The FMU instance shared by the generic FMI glue (fmi2_glue.c) and the co-simulation stepper
+ * (cosimulation.c). The model itself is behind the interface of fmu_model.h. */
 #ifndef CSFH_FMU_INSTANCE_H
 #define CSFH_FMU_INSTANCE_H
 
 #include "fmi2Functions.h"
 
-#include "csfh_model.h"
+#include "fmu_model.h"
 
 /* FMI 2.0 instance states (bit mask, one check per call). */
 typedef enum {
@@ -29,8 +29,12 @@ enum {
 
 typedef struct csfh_cvode csfh_cvode_t; /* opaque, cosimulation.c */
 
+/* Relative tolerance of the co-simulation integrator when fmi2SetupExperiment defines none (also
+ * the DefaultExperiment tolerance of modelDescription.xml). */
+#define FMU_DEFAULT_TOLERANCE 1e-6
+
 typedef struct {
-    csfh_model_t model;
+    void *model;            /* the model struct, fmu_model.size bytes */
     fmi2Type type;
     char *instance_name;
     fmi2CallbackLogger logger;
@@ -40,7 +44,7 @@ typedef struct {
     int prepared;           /* model.d is valid for the current parameters */
     int outputs_valid;      /* model.out matches the current state/inputs */
     int derivatives_valid;  /* model.der matches the current state/inputs */
-    int warned_esdu;        /* the ESDU clamp warning was logged */
+    int warned_outputs;     /* the model's output warning (e.g. the ESDU clamp) was logged */
     /* experiment */
     double tolerance;       /* relative tolerance of the co-simulation integrator */
     double start_time;
@@ -48,7 +52,8 @@ typedef struct {
     int stop_time_defined;
     /* co-simulation */
     csfh_cvode_t *cvode;
-    int cvode_needs_reinit; /* states were changed from outside (set state, restore) */
+    int cvode_needs_reinit; /* restart CVODE: states, inputs or tunable parameters were changed
+                               from outside, an FMU state was taken or restored */
 } fmu_instance_t;
 
 void fmu_log(fmu_instance_t *inst, fmi2Status status, unsigned int category, const char *fmt, ...)
@@ -60,8 +65,26 @@ void fmu_log(fmu_instance_t *inst, fmi2Status status, unsigned int category, con
 /* Invalidate the output and derivative caches after the state, inputs or time changed. */
 void fmu_invalidate(fmu_instance_t *inst);
 
-/* Contact mode update at an event, with logging; returns csfh_model_event_update's value. */
+/* Discrete-state update at an event, with logging; returns fmu_model.event_update's value. */
 int fmu_event_update(fmu_instance_t *inst);
+
+/* Outputs at the current state; logs a model warning once per instance. fmi2OK, fmi2Warning or
+ * fmi2Error (logged, prefixed with `function`). */
+fmi2Status fmu_update_outputs(fmu_instance_t *inst, const char *function);
+
+/* The model's time, continuous states and derivative cache. */
+static inline double *fmu_time(fmu_instance_t *inst)
+{
+    return (double *)((char *)inst->model + fmu_model.time_offset);
+}
+static inline double *fmu_states(fmu_instance_t *inst)
+{
+    return (double *)((char *)inst->model + fmu_model.x_offset);
+}
+static inline double *fmu_derivatives(fmu_instance_t *inst)
+{
+    return (double *)((char *)inst->model + fmu_model.der_offset);
+}
 
 /* Co-simulation (cosimulation.c). */
 void cs_free(fmu_instance_t *inst);

@@ -36,3 +36,15 @@ def core_library_path() -> Path:
         candidates.append(Path(os.environ["CSFH_CORE"]))
     candidates += [_PACKAGE_DIR / "libcsfh_core.so", _SOURCE_ROOT / "build" / "libcsfh_core.so"]
     return _first_existing(candidates, "libcsfh_core.so")
+
+
+def combdrive_fmu_path() -> Path:
+    """Path of combdrive.fmu (the comb-drive actuator for co-simulation): $CSFH_COMBDRIVE_FMU,
+    next to $CSFH_FMU (the same build), the copy inside the package, or build/combdrive.fmu."""
+    candidates = []
+    if os.environ.get("CSFH_COMBDRIVE_FMU"):
+        candidates.append(Path(os.environ["CSFH_COMBDRIVE_FMU"]))
+    if os.environ.get("CSFH_FMU"):
+        candidates.append(Path(os.environ["CSFH_FMU"]).parent / "combdrive.fmu")
+    candidates += [_PACKAGE_DIR / "combdrive.fmu", _SOURCE_ROOT / "build" / "combdrive.fmu"]
+    return _first_existing(candidates, "combdrive.fmu")

@@ -76,7 +76,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 # Further commands live in their own modules; each defines register(subparsers), whose
 # sub-parsers set `func`. Adding a command is adding its module here.
-COMMAND_MODULES: tuple[str, ...] = ()
+COMMAND_MODULES: tuple[str, ...] = ("cli_accuracy", "cli_sweep", "cli_cosim")
 
 
 def build_parser() -> argparse.ArgumentParser:

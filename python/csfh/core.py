@@ -13,7 +13,7 @@ import numpy as np
 
 from ._paths import core_library_path
 
-ABI_VERSION = 1
+ABI_VERSION = 2  # 2: csfh_api_moreau_batch (moreau_batch.py)
 _MSG = 512
 _dp = POINTER(c_double)
 
@@ -70,6 +70,27 @@ def library() -> ctypes.CDLL:
         ),
         "csfh_api_moreau_record_columns": (c_int, []),
         "csfh_api_moreau_impact_columns": (c_int, []),
+        "csfh_api_rk4_run": (
+            c_int,
+            [
+                c_void_p,
+                c_double,
+                c_double,
+                c_double,
+                c_double,
+                _dp,
+                c_double,
+                c_double,
+                _dp,
+                c_size_t,
+                _dp,
+                c_size_t,
+                _dp,
+                POINTER(c_longlong),
+            ],
+        ),
+        "csfh_api_rk4_record_columns": (c_int, []),
+        "csfh_api_contact_record_columns": (c_int, []),
     }
     for name, (restype, argtypes) in sig.items():
         fn = getattr(lib, name)

@@ -26,7 +26,7 @@ from fmpy.model_description import ModelDescription
 from . import model_info
 from ._paths import fmu_path
 from .progress import Progress
-from .results import Trajectory
+from .results import CONTACT_FIELDS, Trajectory
 from .scene import Scene
 
 STATE_NAMES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
@@ -150,6 +150,11 @@ def _one_step_solver(fmu: FMU2Model, rtol: float, t0: float):
     return solver, api, dky, NV_DATA_S(dky), sunrealtype
 
 
+def _contact_arrays(records: list[list[float]]) -> dict[str, np.ndarray]:
+    data = np.array(records, dtype=float).reshape(-1, len(CONTACT_FIELDS))
+    return {name: data[:, i].copy() for i, name in enumerate(CONTACT_FIELDS)}
+
+
 def _evaluations(fmu: FMU2Model | FMU2Slave) -> dict[str, int]:
     """The FMU's evaluation counters: how often each part of the physics ran."""
     parts = ("rhs", "flexure", "contact", "friction")
@@ -174,11 +179,14 @@ def simulate_me(
     stop_time: float | None = None,
     max_step_records: int = 200_000,
     parameters: dict[str, Any] | None = None,
+    output_times: np.ndarray | None = None,
     progress: Progress | None = None,
 ) -> Trajectory:
     """Model exchange of the FMU with contact law `law`, CVode (BDF) via fmpy, events located by
-    root finding on the gap. Returns the output table (grid + event instants), per-step records
-    (the first `max_step_records` steps) and statistics."""
+    root finding on the gap. Returns the output table (the grid k * output_interval, or the given
+    increasing `output_times`, plus the event instants), per-step records (the first
+    `max_step_records` steps), per-contact records (peaks located on CVODE's interpolant) and
+    statistics."""
     if law not in model_info.LAWS:
         raise ValueError(f"law {law!r} is not an event-driven law ({', '.join(model_info.LAWS)})")
     from fmpy.sundials.cvode import CV_ROOT_RETURN, CVode
@@ -192,6 +200,9 @@ def simulate_me(
     out_vrs = [_vr(n) for n in OUTPUT_NAMES.values()]
     count_vr = _vr("contact.count")
     active_vr = _vr("contact.active")
+    onset_vr = _vr("contact.onset_speed")
+    rate_vr = _vr("contact.indentation_rate")
+    ind_vr = _vr("contact.indentation")
     rhs_vr = _vr("diagnostics.rhs_evaluations")
 
     wall = time.perf_counter()
@@ -214,10 +225,52 @@ def simulate_me(
         table.add([0.0, *fmu.getReal(out_vrs)])
 
         solver, api, dky, dky_data, realtype = _one_step_solver(fmu, rtol, 0.0)
+        peak_vrs = [_vr("contact.F_N"), ind_vr]
+        i_F, i_ind = list(OUTPUT_NAMES).index("F_N"), list(OUTPUT_NAMES).index("indentation")
+        in_contact = bool(fmu.getBoolean([active_vr])[0])
+        records: list[list[float]] = []
+        if in_contact:
+            records.append([0.0, fmu.getReal([onset_vr])[0], math.nan, math.nan, 0.0, 0.0])
+        prev_peak_values = tuple(fmu.getReal(peak_vrs))
+
+        def interpolated(tq: float, vrs: list[int]) -> list[float]:
+            """Outputs at tq inside the last step, from CVODE's interpolant."""
+            api["CVodeGetDky"](solver.cvode_mem, tq, 0, dky)
+            fmu.setTime(tq)
+            fmu.setContinuousStates(dky_data, 6)
+            return fmu.getReal(vrs)
+
+        def refine_peaks(rec: list[float], ta: float, tb: float, at_a: tuple[float, float]) -> None:
+            """Largest F_N and indentation over the step [ta, tb]: the end values, and, where
+            the time derivative along CVODE's interpolant changes sign from + to - inside the
+            step, the value at the root of that derivative (bisection on the interpolant)."""
+            eps = 1e-7 * (tb - ta)
+
+            def slope(tq: float, j: int) -> float:
+                lo, hi = max(ta, tq - eps), min(tb, tq + eps)
+                return (interpolated(hi, peak_vrs)[j] - interpolated(lo, peak_vrs)[j]) / (hi - lo)
+
+            at_b = interpolated(tb, peak_vrs)
+            for col, j in ((4, 0), (5, 1)):
+                peak = max(at_a[j], at_b[j])
+                if tb - ta > 1e-13 * max(1.0, abs(tb)) and slope(ta, j) > 0 > slope(tb, j):
+                    lo, hi = ta, tb
+                    while hi - lo > 1e-14 * max(1.0, abs(hi)):
+                        mid = 0.5 * (lo + hi)
+                        if mid <= lo or mid >= hi:
+                            break
+                        lo, hi = (mid, hi) if slope(mid, j) > 0 else (lo, mid)
+                    peak = max(peak, interpolated(0.5 * (lo + hi), peak_vrs)[j])
+                rec[col] = max(rec[col], peak)
+
         api["CVodeSetStopTime"](solver.cvode_mem, t_end)
         t = 0.0
-        n_out = 1
-        next_out = dt_out
+        if output_times is None:
+            grid = np.arange(1, math.floor(t_end / dt_out * (1 + 1e-12)) + 1) * dt_out
+        else:
+            grid = np.asarray(output_times, dtype=float)
+            grid = grid[(grid > 0) & (grid <= t_end * (1 + 1e-12))]
+        i_out = 0
         n_steps_total = 0
         n_events = 0
         tret = realtype(0.0)
@@ -231,17 +284,16 @@ def simulate_me(
                 )
             t_new = tret.value
             # outputs on the regular grid inside the step, from CVODE's interpolant
-            while next_out <= t_new * (1 + 1e-14) and next_out <= t_end * (1 + 1e-12):
-                api["CVodeGetDky"](solver.cvode_mem, next_out, 0, dky)
-                fmu.setTime(next_out)
-                fmu.setContinuousStates(dky_data, 6)
-                table.add([next_out, *fmu.getReal(out_vrs)])
-                n_out += 1
-                next_out = n_out * dt_out
+            while i_out < len(grid) and grid[i_out] <= t_new * (1 + 1e-14):
+                table.add([float(grid[i_out]), *interpolated(float(grid[i_out]), out_vrs)])
+                i_out += 1
+            if in_contact and records:
+                refine_peaks(records[-1], t, t_new, prev_peak_values)
             fmu.setTime(t_new)
             fmu.setContinuousStates(solver.px, 6)
             api["CVodeGetNumSteps"](solver.cvode_mem, byref(nst))
             row = [t_new, *fmu.getReal(out_vrs)]
+            prev_peak_values = (row[1 + i_F], row[1 + i_ind])
             if len(steps.rows) < max_step_records:
                 steps.add(row)
             t = t_new
@@ -255,8 +307,15 @@ def simulate_me(
                 if count > n_contacts:
                     contacts.append(t)
                     n_contacts = count
+                    in_contact = True
+                    records.append([t, fmu.getReal([onset_vr])[0], math.nan, math.nan, 0.0, 0.0])
+                    prev_peak_values = tuple(fmu.getReal([_vr("contact.F_N"), ind_vr]))
                 elif not fmu.getBoolean([active_vr])[0]:
                     releases.append(t)
+                    in_contact = False
+                    if records:
+                        records[-1][2] = t
+                        records[-1][3] = -fmu.getReal([rate_vr])[0]
                 n_steps_total += nst.value  # CVodeReInit restarts the count
                 solver.reset(t)
                 api["CVodeSetStopTime"](solver.cvode_mem, t_end)
@@ -276,6 +335,7 @@ def simulate_me(
         contacts=np.array(contacts),
         steps=steps.arrays(),
         releases=np.array(releases),
+        contact_records=_contact_arrays(records),
     )
     tr.stats = {
         "integrator": f"CVode BDF (fmpy, model exchange) rtol={rtol:g}",
@@ -307,6 +367,7 @@ def simulate_cs(
     md = model_info.model_description()
     out_vrs = [_vr(n) for n in OUTPUT_NAMES.values()]
     count_vr = _vr("contact.count")
+    active_vr = _vr("contact.active")
     wall = time.perf_counter()
     fmu = _instantiate(FMU2Slave, md, "CS")
     try:
@@ -317,14 +378,42 @@ def simulate_cs(
         table = _Table(_TABLE_COLUMNS)
         table.add([0.0, *fmu.getReal(out_vrs)])
         n = math.ceil(t_end / h - 1e-9)
-        counts = [fmu.getInteger([count_vr])[0]]
+        event_vrs = [
+            _vr(n)
+            for n in (
+                "contact.onset_time",
+                "contact.onset_speed",
+                "contact.release_time",
+                "contact.release_speed",
+            )
+        ]
+        count, active = fmu.getInteger([count_vr])[0], bool(fmu.getBoolean([active_vr])[0])
+        records: list[list[float]] = []
+        if count:
+            records.append(
+                [0.0, fmu.getReal([event_vrs[1]])[0], math.nan, math.nan, math.nan, math.nan]
+            )
         t = 0.0
+        do_step_time = 0.0
         for k in range(n):
             t_next = min((k + 1) * h, t_end)
+            t0 = time.perf_counter()
             fmu.doStep(currentCommunicationPoint=t, communicationStepSize=t_next - t)
+            do_step_time += time.perf_counter() - t0
             t = t_next
             table.add([t, *fmu.getReal(out_vrs)])
-            counts.append(fmu.getInteger([count_vr])[0])
+            # the FMU reports the located event times of the last onset and release; contacts
+            # that begin and end inside one communication step show only their last values
+            new_count, new_active = (
+                fmu.getInteger([count_vr])[0],
+                bool(fmu.getBoolean([active_vr])[0]),
+            )
+            t_on, v_on, t_off, v_off = fmu.getReal(event_vrs)
+            if new_count > count:
+                records.append([t_on, v_on, math.nan, math.nan, math.nan, math.nan])
+            if records and not new_active and (new_count > count or active):
+                records[-1][2:4] = [t_off, v_off]
+            count, active = new_count, new_active
             if progress is not None:
                 progress.update(t / t_end)
         steps, rhs = fmu.getInteger(
@@ -334,11 +423,15 @@ def simulate_cs(
         fmu.terminate()
     finally:
         fmu.freeInstance()
-    arrays = table.arrays()
-    counts_np = np.array(counts)
-    # onset times known to the communication step only (the FMU locates them exactly inside)
-    onsets = arrays["t"][1:][np.diff(counts_np) > 0]
-    tr = Trajectory(model=law, scene=scene.name, table=arrays, contacts=onsets)
+    cr = _contact_arrays(records)
+    tr = Trajectory(
+        model=law,
+        scene=scene.name,
+        table=table.arrays(),
+        contacts=cr["t_onset"],
+        releases=cr["t_release"][np.isfinite(cr["t_release"])],
+        contact_records=cr,
+    )
     tr.stats = {
         "integrator": f"CVODE BDF inside the FMU (co-simulation) rtol={rtol:g}, "
         f"communication step {h:g} s",
@@ -346,6 +439,7 @@ def simulate_cs(
         "rhs_evaluations": int(rhs),
         "evaluations": evaluations,
         "wall_time": time.perf_counter() - wall,
+        "do_step_time": do_step_time,
     }
     return tr
 

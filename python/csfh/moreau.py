@@ -146,12 +146,22 @@ def moreau(
     rec = records[: st["records"]]
     imp = impacts[: st["impacts"]]
     table = {name: rec[:, i].copy() for i, name in enumerate(_RECORD)}
+    impacts_d = {name: imp[:, i].copy() for i, name in enumerate(_IMPACT)}
+    records_d = {  # rigid impacts: onset and release in one step, the impulse/h as "force"
+        "t_onset": impacts_d["t"],
+        "onset_speed": -impacts_d["gamma_N_before"],
+        "t_release": impacts_d["t"] + h,
+        "release_speed": impacts_d["gamma_N_after"],
+        "peak_F_N": impacts_d["Lambda_N"] / h,
+        "max_indentation": np.full(len(imp), np.nan),
+    }
     tr = Trajectory(
         model="Moreau",
         scene=scene.name,
         table=table,
         contacts=imp[:, 0].copy(),
-        impacts={name: imp[:, i].copy() for i, name in enumerate(_IMPACT)},
+        impacts=impacts_d,
+        contact_records=records_d,
     )
     st.update(
         {

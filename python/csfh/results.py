@@ -13,6 +13,16 @@ import numpy as np
 COLUMNS = ("t", "x", "y", "theta", "vx", "vy", "omega", "F_N", "F_T", "indentation", "v_T")
 """Columns of every output table (SI units: s, m, m, rad, m/s, m/s, rad/s, N, N, m, m/s)."""
 EXTRA_COLUMNS = ("gap", "energy")
+CONTACT_FIELDS = (
+    "t_onset",
+    "onset_speed",
+    "t_release",
+    "release_speed",
+    "peak_F_N",
+    "max_indentation",
+)
+"""Per-contact record every integrator reports (s, m/s, s, m/s, N, m): the indentation rate at the
+onset, the separation speed dg/dt at the release, the largest normal force and indentation."""
 UNITS = {
     "t": "s",
     "x": "m",
@@ -48,6 +58,7 @@ class Trajectory:
     steps: dict[str, np.ndarray] = field(default_factory=dict)
     impacts: dict[str, np.ndarray] = field(default_factory=dict)
     releases: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    contact_records: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __getitem__(self, column: str) -> np.ndarray:
         return self.table[column]

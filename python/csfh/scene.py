@@ -29,6 +29,9 @@ the model are on, parameter overrides, constant inputs and integrator settings.
     g_tol = 0.0                 # Moreau: contact active when the gap <= g_tol
 
     models = ["LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau"]   # for `csfh compare`
+
+    [cosim]                     # co-simulation with the comb-drive actuator (`csfh cosim`);
+                                # keys in the docstring of csfh.cosim, ignored by the other commands
 """
 
 from __future__ import annotations
@@ -43,7 +46,7 @@ from typing import Any
 from . import model_info
 from .presets import PRESETS
 
-BUILTIN_SCENES = ("central", "asymmetric", "csfh")
+BUILTIN_SCENES = ("central", "asymmetric", "csfh", "combdrive")  # combdrive: `csfh cosim`
 STICK_RULES = ("paper", "memory")
 
 
@@ -76,6 +79,7 @@ class Scene:
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
     models: tuple[str, ...] = model_info.PAPER_MODELS
     source: str = ""
+    cosim: dict[str, Any] = field(default_factory=dict)  # [cosim], validated by csfh.cosim
 
     @property
     def x0(self) -> list[float]:
@@ -112,6 +116,7 @@ _TOP_KEYS = {
     "inputs",
     "integrator",
     "models",
+    "cosim",
 }
 _INPUTS = ("F_ext[1]", "F_ext[2]", "M_ext")
 
@@ -213,6 +218,11 @@ def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
     description = data.get("description", "")
     if not isinstance(description, str):
         raise SceneError("description must be a string")
+    cosim = dict(_table("[cosim]", data.get("cosim", {})))
+    if cosim:
+        from .cosim import parse_cosim  # co-simulation settings: one-line errors like the above
+
+        parse_cosim(cosim, inputs)
     scene = Scene(
         name=name,
         description=description,
@@ -227,6 +237,7 @@ def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
         integrator=settings,
         models=tuple(models),
         source=source,
+        cosim=cosim,
     )
     _check_values(scene)
     return scene

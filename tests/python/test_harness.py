@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from csfh.core import CoreModel
 from csfh.fmu_runner import simulate_me
 from csfh.moreau import core_model, moreau

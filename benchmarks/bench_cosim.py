@@ -1,0 +1,233 @@
+"""Co-simulation (CVODE inside the FMU, fmi2DoStep) against model exchange (fmpy's CVode driving
+the same FMU through Python callbacks) on 1 s of the `csfh` scene: same FMU, same contact law
+(LN_spheres), same relative tolerance, same output grid; every ratio is measured in one run
+(medians of repeats, the variants interleaved). Target: CS >= 10x faster.
+
+A. Complete runs with the harness drivers (instantiate, set the scene, simulate, free):
+   ME: csfh.fmu_runner.simulate_me (one CVode step at a time, dense output onto the grid)
+   CS: csfh.fmu_runner.simulate_cs (one fmi2DoStep per grid point)
+   and fmpy's own two drivers, fmpy.simulate_fmu with fmi_type ModelExchange / CoSimulation.
+B. The simulation loop alone, after initialization (what differs between the interfaces; the
+   FMU loading and the parameter setting cost the same in both): fmpy's CVodeSolver stepping the
+   model-exchange instance from grid point to grid point with event iteration (the loop of
+   fmpy.simulate_fmu), against fmi2DoStep from grid point to grid point. Both read the six
+   states at every grid point.
+
+Run: python benchmarks/bench_cosim.py [--repeats 5] [--rtol 1e-6 1e-8] [--grid 1e-2 1e-3 1e-4]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from collections.abc import Callable
+from typing import Any
+
+import fmpy
+import numpy as np
+
+from csfh import load_scene, model_info
+from csfh.fmu_runner import STATE_NAMES, simulate_cs, simulate_me
+from csfh.scene import Scene
+
+LAW = "LN_spheres"
+
+
+def interleaved(variants: dict[str, Callable[[], Any]], repeats: int) -> dict[str, float]:
+    """Median wall time of each variant, the variants run in turn (same machine state)."""
+    times: dict[str, list[float]] = {k: [] for k in variants}
+    for _ in range(repeats):
+        for name, fn in variants.items():
+            t0 = time.perf_counter()
+            fn()
+            times[name].append(time.perf_counter() - t0)
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
+def start_values(scene: Scene) -> dict[str, Any]:
+    values: dict[str, Any] = dict(scene.parameter_values(LAW))
+    values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
+    return values
+
+
+def _setup(fmu: Any, scene: Scene, rtol: float) -> None:
+    variables = model_info.variables()
+    fmu.setupExperiment(tolerance=rtol, startTime=0.0, stopTime=scene.stop_time)
+    fmu.enterInitializationMode()
+    for name, value in start_values(scene).items():
+        ref, kind = variables[name].valueReference, variables[name].type
+        if kind == "Real":
+            fmu.setReal([ref], [float(value)])
+        elif kind == "Boolean":
+            fmu.setBoolean([ref], [bool(value)])
+        else:
+            fmu.setInteger([ref], [int(value)])
+    fmu.exitInitializationMode()
+
+
+class Loops:
+    """One model-exchange and one co-simulation instance, re-initialized (fmi2Reset) for every
+    run; only the simulation loop is timed."""
+
+    def __init__(self, scene: Scene) -> None:
+        from fmpy.fmi2 import FMU2Model, FMU2Slave
+
+        from csfh._paths import fmu_path
+
+        md = model_info.model_description()
+        directory = fmpy.extract(str(fmu_path()))
+        self.scene = scene
+        self.refs = [model_info.variables()[n].valueReference for n in STATE_NAMES]
+        self.count = model_info.variables()["contact.count"].valueReference
+        kw = {"guid": md.guid, "unzipDirectory": directory, "modelIdentifier": "csfh"}
+        self.me = FMU2Model(instanceName="me", **kw)
+        self.cs = FMU2Slave(instanceName="cs", **kw)
+        self.me.instantiate()
+        self.cs.instantiate()
+
+    def run_me(self, rtol: float, dt: float) -> tuple[float, int]:
+        from fmpy.sundials import CVodeSolver
+
+        me = self.me
+        me.reset()
+        _setup(me, self.scene, rtol)
+        while me.newDiscreteStates()[0]:
+            pass
+        me.enterContinuousTimeMode()
+
+        class NoInput:
+            def apply(self, t: float, **_: Any) -> None:
+                return None
+
+        solver = CVodeSolver(
+            nx=6,
+            nz=1,
+            get_x=me.getContinuousStates,
+            set_x=me.setContinuousStates,
+            get_dx=me.getDerivatives,
+            get_z=me.getEventIndicators,
+            get_nominals=me.getNominalsOfContinuousStates,
+            set_time=me.setTime,
+            input=NoInput(),
+            startTime=0.0,
+            relativeTolerance=rtol,
+            maxNumSteps=100000,
+        )
+        n = round(self.scene.stop_time / dt)
+        t0 = time.perf_counter()
+        t, k = 0.0, 1
+        while k <= n:
+            t_next = k * dt
+            event, _, t = solver.step(t, t_next)
+            me.setTime(t)
+            if event:
+                me.enterEventMode()
+                while me.newDiscreteStates()[0]:
+                    pass
+                me.enterContinuousTimeMode()
+                solver.reset(t)
+            if t >= t_next * (1 - 1e-12):
+                me.getReal(self.refs)
+                k += 1
+        wall = time.perf_counter() - t0
+        contacts = me.getInteger([self.count])[0]
+        del solver
+        me.terminate()
+        return wall, contacts
+
+    def run_cs(self, rtol: float, dt: float) -> tuple[float, int]:
+        cs = self.cs
+        cs.reset()
+        _setup(cs, self.scene, rtol)
+        n = round(self.scene.stop_time / dt)
+        t0 = time.perf_counter()
+        for k in range(n):
+            cs.doStep(k * dt, dt)
+            cs.getReal(self.refs)
+        wall = time.perf_counter() - t0
+        contacts = cs.getInteger([self.count])[0]
+        cs.terminate()
+        return wall, contacts
+
+    def free(self) -> None:
+        self.me.freeInstance()
+        self.cs.freeInstance()
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--rtol", type=float, nargs="+", default=[1e-6, 1e-8])
+    ap.add_argument("--grid", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4])
+    args = ap.parse_args()
+    scene = load_scene("csfh")
+    path = str(__import__("csfh").fmu_path())
+    print(
+        f"scene csfh, {scene.stop_time:g} s, law {LAW}; wall times in ms, median of "
+        f"{args.repeats}; ratio = ME / CS"
+    )
+
+    print("\nA. complete runs (instantiate .. free)")
+    print(
+        f"  {'rtol':>6} {'grid [s]':>8} | {'simulate_me':>11} {'simulate_cs':>11} {'ratio':>6} "
+        f"| {'fmpy ME':>8} {'fmpy CS':>8} {'ratio':>6} | CS vs fmpy ME"
+    )
+    for rtol in args.rtol:
+        for dt in args.grid:
+            fmpy_kw = {
+                "stop_time": scene.stop_time,
+                "relative_tolerance": rtol,
+                "output_interval": dt,
+                "start_values": start_values(scene),
+                "output": ["body1.y"],
+            }
+            t = interleaved(
+                {
+                    "me": lambda r=rtol, d=dt: simulate_me(scene, LAW, rtol=r, output_interval=d),
+                    "cs": lambda r=rtol, d=dt: simulate_cs(
+                        scene, LAW, rtol=r, communication_step=d
+                    ),
+                    "fme": lambda kw=fmpy_kw: fmpy.simulate_fmu(
+                        path, fmi_type="ModelExchange", **kw
+                    ),
+                    "fcs": lambda kw=fmpy_kw: fmpy.simulate_fmu(
+                        path, fmi_type="CoSimulation", **kw
+                    ),
+                },
+                args.repeats,
+            )
+            print(
+                f"  {rtol:6.0e} {dt:8.0e} | {1e3 * t['me']:11.1f} {1e3 * t['cs']:11.1f} "
+                f"{t['me'] / t['cs']:5.1f}x | {1e3 * t['fme']:8.1f} {1e3 * t['fcs']:8.1f} "
+                f"{t['fme'] / t['fcs']:5.1f}x | {t['fme'] / t['cs']:5.1f}x"
+            )
+
+    print("\nB. the simulation loop alone (after initialization, same instances re-used)")
+    print(
+        f"  {'rtol':>6} {'grid [s]':>8} | {'ME (fmpy CVode)':>15} {'CS (doStep)':>11} "
+        f"{'ratio':>6} | contacts ME/CS | target >= 10x"
+    )
+    loops = Loops(scene)
+    try:
+        for rtol in args.rtol:
+            for dt in args.grid:
+                walls: dict[str, list[float]] = {"me": [], "cs": []}
+                contacts = {}
+                for _ in range(args.repeats):
+                    for kind, fn in (("me", loops.run_me), ("cs", loops.run_cs)):
+                        wall, contacts[kind] = fn(rtol, dt)
+                        walls[kind].append(wall)
+                me_t, cs_t = (float(np.median(walls[k])) for k in ("me", "cs"))
+                ratio = me_t / cs_t
+                print(
+                    f"  {rtol:6.0e} {dt:8.0e} | {1e3 * me_t:15.1f} {1e3 * cs_t:11.1f} "
+                    f"{ratio:5.1f}x | {contacts['me']:>8}/{contacts['cs']:<5} | "
+                    f"{'met' if ratio >= 10 else 'NOT met'}"
+                )
+    finally:
+        loops.free()
+
+
+if __name__ == "__main__":
+    main()

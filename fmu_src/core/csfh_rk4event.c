@@ -1,0 +1,140 @@
+#include "csfh_rk4event.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "csfh_contact.h"
+
+/* Classical RK4 step with the model's right-hand side (current discrete state). */
+static int rk4_step(csfh_model_t *m, const double x[6], double h, double xn[6])
+{
+    double k1[6], k2[6], k3[6], k4[6], y[6];
+    int status = csfh_model_derivatives(m, x, k1);
+    for (int i = 0; i < 6; i++) {
+        y[i] = x[i] + 0.5 * h * k1[i];
+    }
+    status |= csfh_model_derivatives(m, y, k2);
+    for (int i = 0; i < 6; i++) {
+        y[i] = x[i] + 0.5 * h * k2[i];
+    }
+    status |= csfh_model_derivatives(m, y, k3);
+    for (int i = 0; i < 6; i++) {
+        y[i] = x[i] + h * k3[i];
+    }
+    status |= csfh_model_derivatives(m, y, k4);
+    for (int i = 0; i < 6; i++) {
+        xn[i] = x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        if (!isfinite(xn[i])) {
+            return CSFH_ERR_NONFINITE;
+        }
+    }
+    return status < 0 ? CSFH_ERR_NONFINITE : CSFH_OK;
+}
+
+static void write_record(csfh_model_t *m, double t, const double x[6], double *row)
+{
+    memcpy(m->x, x, 6 * sizeof(double));
+    csfh_model_outputs(m);
+    row[0] = t;
+    for (int i = 0; i < 6; i++) {
+        row[1 + i] = x[i];
+    }
+    row[7] = m->out.F_N;
+    row[8] = m->out.F_T;
+    row[9] = m->out.indentation;
+    row[10] = m->out.v_T;
+    row[11] = m->out.gap;
+    row[12] = m->out.E_total;
+}
+
+int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
+                       const double x0[6], double t_end, double dt_out, double *records,
+                       size_t max_records, double *contacts, size_t max_contacts, double x_end[6],
+                       csfh_rk4_stats_t *stats)
+{
+    memset(stats, 0, sizeof(*stats));
+    const int rhs_before = m->counters.rhs;
+    double x[6], xn[6];
+    memcpy(x, x0, sizeof(x));
+    memcpy(m->x, x0, sizeof(x));
+    m->time = t0;
+    csfh_model_init_discrete(m);
+    double *current = NULL; /* the contact record being filled */
+    if (m->z.in_contact && contacts != NULL && max_contacts > 0) {
+        current = contacts;
+        current[CSFH_CR_T_ONSET] = t0;
+        current[CSFH_CR_ONSET_SPEED] = m->z.onset_speed;
+        current[CSFH_CR_T_RELEASE] = current[CSFH_CR_RELEASE_SPEED] = NAN;
+        current[CSFH_CR_PEAK_F_N] = current[CSFH_CR_MAX_INDENTATION] = 0.0;
+        stats->contacts = 1;
+    }
+    if (records != NULL && max_records > 0) {
+        write_record(m, t0, x, records);
+        stats->records = 1;
+    }
+    double t = t0, h = o->h0, next_out = t0 + dt_out;
+    long long k_out = 1;
+    int status = CSFH_OK;
+    while (t < t_end - 1e-12 * fabs(t_end)) {
+        const double h_try = fmin(h, t_end - t);
+        status = rk4_step(m, x, h_try, xn);
+        if (status != CSFH_OK) {
+            break;
+        }
+        const double gap = csfh_contact_gap(m->d.delta, m->p.s1bar, xn);
+        const int contact_law = m->p.law != CSFH_CONTACTLAW_NONE;
+        if (contact_law && !m->z.in_contact && gap < -o->tol && h_try > o->h_min) {
+            h = 0.5 * h_try; /* bisection toward the event (paper, Fig. 3) */
+            stats->rejected_steps++;
+            continue;
+        }
+        t += h_try;
+        memcpy(x, xn, sizeof(x));
+        memcpy(m->x, x, sizeof(x));
+        m->time = t;
+        stats->steps++;
+        if (contact_law && !m->z.in_contact && gap <= 0.0) {
+            csfh_model_event_update(m); /* onset: the indentation rate is captured */
+            if (contacts != NULL && stats->contacts < max_contacts) {
+                current = contacts + stats->contacts * CSFH_CR_NCOLS;
+                current[CSFH_CR_T_ONSET] = t;
+                current[CSFH_CR_ONSET_SPEED] = m->z.onset_speed;
+                current[CSFH_CR_T_RELEASE] = current[CSFH_CR_RELEASE_SPEED] = NAN;
+                current[CSFH_CR_PEAK_F_N] = current[CSFH_CR_MAX_INDENTATION] = 0.0;
+                stats->contacts++;
+            } else {
+                current = NULL;
+            }
+        } else if (m->z.in_contact && gap > 0.0) {
+            m->z.in_contact = 0; /* release; back to the nominal step */
+            h = o->h0;
+            if (current != NULL) {
+                csfh_contact_kin_t kin;
+                csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, x, &kin);
+                current[CSFH_CR_T_RELEASE] = t;
+                current[CSFH_CR_RELEASE_SPEED] =
+                    kin.DN[0] * x[3] + kin.DN[1] * x[4] + kin.DN[2] * x[5];
+                current = NULL;
+            }
+            m->z.release_time = t;
+        }
+        if (m->z.in_contact && current != NULL) {
+            csfh_contact_eval_t c;
+            csfh_model_contact(m, x, x + 3, &c);
+            current[CSFH_CR_PEAK_F_N] = fmax(current[CSFH_CR_PEAK_F_N], c.F_N);
+            current[CSFH_CR_MAX_INDENTATION] = fmax(current[CSFH_CR_MAX_INDENTATION], c.rho);
+        }
+        if (t >= next_out - 1e-12 * fabs(next_out)) {
+            if (records != NULL && stats->records < max_records) {
+                write_record(m, t, x, records + stats->records * CSFH_RK4_RECORD_NCOLS);
+                stats->records++;
+            }
+            while (next_out <= t + 1e-12 * fabs(t)) {
+                next_out = t0 + (double)(++k_out) * dt_out;
+            }
+        }
+    }
+    memcpy(x_end, x, sizeof(x));
+    stats->rhs = m->counters.rhs - rhs_before;
+    return status;
+}

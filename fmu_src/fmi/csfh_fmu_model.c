@@ -1,0 +1,109 @@
+/* The csfh model behind the generic FMI glue (fmu_model.h): the physics core's functions and the
+ * generated variable table, plus the log messages of contact events. */
+#include <math.h>
+#include <stdio.h>
+
+#include "csfh_model.h"
+#include "csfh_variables.h"
+#include "fmu_model.h"
+
+static void set_defaults(void *m)
+{
+    csfh_model_set_defaults((csfh_model_t *)m);
+}
+
+static int prepare(void *m, char *msg, size_t msg_size)
+{
+    return csfh_model_prepare((csfh_model_t *)m, msg, msg_size);
+}
+
+static void init_discrete(void *mv, char *msg, size_t msg_size)
+{
+    csfh_model_t *m = (csfh_model_t *)mv;
+    csfh_model_init_discrete(m);
+    if (m->z.in_contact) {
+        snprintf(msg, msg_size, "t = %.17g: starts in contact", m->time);
+    } else if (msg_size > 0) {
+        msg[0] = '\0';
+    }
+}
+
+static int derivatives(void *m, const double *x, double *xdot)
+{
+    const int status = csfh_model_derivatives((csfh_model_t *)m, x, xdot);
+    if (status == CSFH_ERR_NONFINITE) {
+        return FMU_MODEL_NONFINITE;
+    }
+    return status == CSFH_WARN_ESDU_CLAMPED ? FMU_MODEL_WARNING : FMU_MODEL_OK;
+}
+
+static void event_indicators(const void *m, const double *x, double *z)
+{
+    z[0] = csfh_model_event_indicator((const csfh_model_t *)m, x);
+}
+
+static int event_update(void *mv, char *msg, size_t msg_size)
+{
+    csfh_model_t *m = (csfh_model_t *)mv;
+    const int change = csfh_model_event_update(m);
+    if (change == 1) {
+        snprintf(msg, msg_size, "t = %.17g: contact %d starts, onset indentation rate %g m/s",
+                 m->time, m->z.contact_count, m->z.onset_speed);
+    } else if (change == 2) {
+        snprintf(msg, msg_size, "t = %.17g: contact ends", m->time);
+    } else if (msg_size > 0) {
+        msg[0] = '\0';
+    }
+    return change;
+}
+
+static int outputs(void *mv, char *msg, size_t msg_size)
+{
+    csfh_model_t *m = (csfh_model_t *)mv;
+    const int status = csfh_model_outputs(m);
+    const csfh_outputs_t *o = &m->out;
+    const double values[] = {o->F_N, o->F_T, o->indentation, o->gap, o->v_T,
+                             o->indentation_rate, o->E_total};
+    for (size_t i = 0; i < sizeof(values) / sizeof(values[0]); i++) {
+        if (!isfinite(values[i])) {
+            snprintf(msg, msg_size, "non-finite output at t = %.17g", m->time);
+            return FMU_MODEL_NONFINITE;
+        }
+    }
+    if (status == CSFH_WARN_ESDU_CLAMPED) {
+        snprintf(msg, msg_size,
+                 "indentation beyond the validity of the ESDU law (4 (R2 - R1)); the force is "
+                 "held at contact.esdu_F_max = %g N",
+                 m->d.esdu_F_max);
+        return FMU_MODEL_WARNING;
+    }
+    return FMU_MODEL_OK;
+}
+
+static void add_integrator_steps(void *mv, long steps)
+{
+    csfh_model_t *m = (csfh_model_t *)mv;
+    const long room = 0x7fffffffL - m->counters.steps; /* the counter saturates at INT_MAX */
+    m->counters.steps += (int)(steps < room ? steps : room);
+}
+
+const fmu_model_t fmu_model = {
+    .guid = CSFH_GUID,
+    .model_identifier = CSFH_MODEL_IDENTIFIER,
+    .n_states = CSFH_NUMBER_OF_STATES,
+    .n_event_indicators = CSFH_NUMBER_OF_EVENT_INDICATORS,
+    .n_variables = CSFH_NUMBER_OF_VARIABLES,
+    .variables = csfh_variables,
+    .size = sizeof(csfh_model_t),
+    .time_offset = offsetof(csfh_model_t, time),
+    .x_offset = offsetof(csfh_model_t, x),
+    .der_offset = offsetof(csfh_model_t, der),
+    .set_defaults = set_defaults,
+    .prepare = prepare,
+    .init_discrete = init_discrete,
+    .derivatives = derivatives,
+    .event_indicators = event_indicators,
+    .event_update = event_update,
+    .outputs = outputs,
+    .add_integrator_steps = add_integrator_steps,
+};

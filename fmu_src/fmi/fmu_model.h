@@ -1,0 +1,65 @@
+/* The model interface of the generic FMI 2.0 glue.
+ *
+ * fmi2_glue.c (instance life cycle, state machine, get/set through the generated variable table,
+ * model exchange, FMU state) and cosimulation.c (fmi2DoStep with CVODE) know nothing about the
+ * physics: an FMU binary is the glue linked with one model adapter that defines the constant
+ * `fmu_model` below. The csfh FMU's adapter is csfh_fmu_model.c, the comb-drive actuator's is
+ * ../combdrive/combdrive_fmu_model.c.
+ *
+ * The model is one plain C struct (`size` bytes) holding everything: time, states, inputs,
+ * parameters, derived quantities, discrete state and outputs. The generated variable table
+ * (modelDescription/generate.py) addresses every FMI variable by its offset in that struct, so
+ * get/set, start values and range checks are generic. The struct is copied bytewise for FMU
+ * states, so it must not hold pointers. */
+#ifndef FMU_MODEL_H
+#define FMU_MODEL_H
+
+#include <stddef.h>
+
+#include "csfh_vartable.h"
+
+/* Return values of derivatives() and outputs(). */
+#define FMU_MODEL_OK 0
+#define FMU_MODEL_WARNING 1 /* computed, with a caveat (message); the glue logs it once */
+#define FMU_MODEL_NONFINITE (-1)
+
+typedef struct {
+    const char *guid;
+    const char *model_identifier;
+    int n_states;              /* continuous states x[], derivatives der[] (may be 0) */
+    int n_event_indicators;    /* 0 or more */
+    int n_variables;
+    const csfh_variable_t *variables; /* the generated table */
+    size_t size;               /* sizeof the model struct */
+    size_t time_offset;        /* double time */
+    size_t x_offset;           /* double x[n_states] */
+    size_t der_offset;         /* double der[n_states] (derivative cache read by fmi2GetReal) */
+
+    /* Start values of every variable (from the table) and a clean discrete state. */
+    void (*set_defaults)(void *m);
+    /* Validate every parameter, input and state start value, compute derived quantities.
+     * 0, or -1 with a message naming the variable and its value. */
+    int (*prepare)(void *m, char *msg, size_t msg_size);
+    /* End of initialization: set the discrete state from the initial continuous state. Writes a
+     * logEvents message (or an empty string). */
+    void (*init_discrete)(void *m, char *msg, size_t msg_size);
+    /* xdot = f(x) with the current inputs and discrete state; FMU_MODEL_OK, FMU_MODEL_WARNING or
+     * FMU_MODEL_NONFINITE. NULL when n_states == 0. */
+    int (*derivatives)(void *m, const double *x, double *xdot);
+    /* z[n_event_indicators] at state x. NULL when n_event_indicators == 0. */
+    void (*event_indicators)(const void *m, const double *x, double *z);
+    /* Discrete-state update at an event (from the model's time and state): 0 if nothing changed,
+     * > 0 if the discrete state changed (the integrator must restart); writes a logEvents
+     * message. NULL when n_event_indicators == 0. */
+    int (*event_update)(void *m, char *msg, size_t msg_size);
+    /* Fill the outputs at the current time, state and inputs: FMU_MODEL_OK, FMU_MODEL_WARNING
+     * (message) or FMU_MODEL_NONFINITE (message). */
+    int (*outputs)(void *m, char *msg, size_t msg_size);
+    /* Add co-simulation integrator steps to the model's counter (may be NULL). */
+    void (*add_integrator_steps)(void *m, long steps);
+} fmu_model_t;
+
+/* Defined by the model adapter linked into the FMU binary. */
+extern const fmu_model_t fmu_model;
+
+#endif

@@ -1,0 +1,497 @@
+"""Error against run time: a work-precision study of every integrator on a scene.
+
+For each event-driven model (LN K spheres, LN K cylinders, LN-ESDU) the integrators are
+
+* ``ME``: model exchange of the FMU with fmpy's CVode (BDF), relative tolerance 1e-3 ... 1e-10;
+* ``CS``: co-simulation, CVODE inside the FMU, the same tolerances;
+* ``RK4``: the paper's scheme, explicit RK4 with step bisection to the event tolerance, at the
+  paper's (h0 = 2e-4 s, 1e-4 m) and at tighter settings;
+
+and the Moreau model runs the Moreau stepper at h = 1e-3 ... 1e-6 s.
+
+The reference of a model is the same model at a much tighter setting (ME at rtol 1e-12 for the
+compliant models, Moreau at a tiny h), and the report shows that halving that setting changes
+every metric by less than 1 % of the smallest error plotted.
+
+Metrics, over the first three contacts (k = 1, 2, 3, matched by order):
+
+* contact time: max_k |t_k - t_k,ref| (onset times, s);
+* peak F_N: max_k |F_k - F_k,ref| / F_k,ref;
+* max indentation: max_k |rho_k - rho_k,ref| / rho_k,ref;
+* rebound normal velocity: max_k |v_k - v_k,ref| / |v_k,ref| (the separation speed dg/dt at the
+  end of contact k);
+* trajectory: max |q - q_ref| over the horizon before the first contact whose onset differs from
+  the reference by more than 1 % of the preceding flight time (t_k,ref - t_k-1,ref), with
+  |q| = max(|x|, |y|, R1 |theta|) in metres (theta as the arc it moves at the contact radius).
+
+Moreau is compared with its own h -> 0 reference on contact time, rebound velocity and trajectory
+(it has no indentation, and its "force" is an impulse divided by h, which has no limit), and
+with the LN K spheres reference on the same three metrics to show the model difference.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .fmu_runner import simulate_cs, simulate_me
+from .moreau import moreau
+from .progress import Progress
+from .results import Trajectory, write_json
+from .rk4 import rk4_event
+from .scene import Scene
+
+COMPLIANT = ("LN_spheres", "LN_cylinders", "LN_ESDU")
+METRICS = ("contact_time", "peak_F_N", "max_indentation", "rebound_velocity", "trajectory")
+METRIC_LABELS = {
+    "contact_time": "contact time error [s]",
+    "peak_F_N": "peak $F_N$ relative error",
+    "max_indentation": "max indentation relative error",
+    "rebound_velocity": "rebound velocity relative error",
+    "trajectory": "trajectory error max|q - q_ref| [m]",
+}
+RIGID_METRICS = ("contact_time", "rebound_velocity", "trajectory")
+
+DEFAULT_SETTINGS: dict[str, list[Any]] = {
+    "ME": [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
+    "CS": [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
+    "RK4": [(2e-4, 1e-4), (1e-4, 1e-5), (5e-5, 1e-6), (2.5e-5, 1e-7), (1.25e-5, 1e-8)],
+    "Moreau": [1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6],
+}
+QUICK_SETTINGS: dict[str, list[Any]] = {
+    "ME": [1e-4, 1e-6, 1e-8],
+    "CS": [1e-4, 1e-6, 1e-8],
+    "RK4": [(2e-4, 1e-4), (5e-5, 1e-6)],
+    "Moreau": [1e-4, 1e-5, 1e-6],
+}
+REF_RTOL = 1e-13
+REF_MOREAU_H = 1e-9
+CS_COMMUNICATION_STEP = 1e-2  # s: the co-simulation runs are observed at these points
+
+
+@dataclass
+class Point:
+    """One integrator at one setting on one model."""
+
+    model: str
+    integrator: str
+    setting: float
+    label: str
+    wall_time: float
+    rhs_evaluations: int
+    steps: int
+    errors: dict[str, float]
+    vs: str = "self"  # which reference: "self" or a compliant model name (Moreau)
+
+
+@dataclass
+class Study:
+    scene: str
+    stop_time: float
+    points: list[Point] = field(default_factory=list)
+    reference_checks: dict[str, dict[str, float]] = field(default_factory=dict)
+    references: dict[str, str] = field(default_factory=dict)
+
+
+# ------------------------------------------------------------------------------------------
+# metrics
+
+
+def _onsets(tr: Trajectory, n: int = 3) -> dict[str, np.ndarray]:
+    cr = tr.contact_records
+    return {k: v[:n] for k, v in cr.items()}
+
+
+def contact_errors(tr: Trajectory, ref: Trajectory, n: int = 3) -> dict[str, float]:
+    """Errors of the first n contacts, matched by order."""
+    a, b = _onsets(tr, n), _onsets(ref, n)
+    k = min(len(a["t_onset"]), len(b["t_onset"]))
+    if k == 0:
+        return {m: math.nan for m in METRICS[:4]}
+
+    def rel(name: str) -> float:
+        x, y = a[name][:k], b[name][:k]
+        ok = np.isfinite(x) & np.isfinite(y) & (np.abs(y) > 0)
+        return float(np.max(np.abs(x[ok] - y[ok]) / np.abs(y[ok]))) if ok.any() else math.nan
+
+    return {
+        "contact_time": float(np.max(np.abs(a["t_onset"][:k] - b["t_onset"][:k]))),
+        "peak_F_N": rel("peak_F_N"),
+        "max_indentation": rel("max_indentation"),
+        "rebound_velocity": rel("release_speed"),
+    }
+
+
+def horizon(tr: Trajectory, ref: Trajectory, stop_time: float) -> float:
+    """End of the comparable horizon: the reference onset of the first contact whose timing
+    differs by more than 1 % of the preceding flight time (or the stop time)."""
+    t, t_ref = tr.contact_records["t_onset"], ref.contact_records["t_onset"]
+    previous = 0.0
+    for k in range(len(t_ref)):
+        if k >= len(t) or abs(t[k] - t_ref[k]) > 0.01 * (t_ref[k] - previous):
+            return float(t_ref[k])
+        previous = float(t_ref[k])
+    return stop_time
+
+
+def trajectory_error(tr: Trajectory, ref: Trajectory, t_max: float, radius: float) -> float:
+    """max over common output times t < t_max of max(|dx|, |dy|, radius |dtheta|)."""
+    ta, tb = tr.t, ref.t
+    idx = np.searchsorted(tb, ta)
+    idx = np.clip(idx, 0, len(tb) - 1)
+    match = (np.abs(tb[idx] - ta) <= 1e-12 * np.maximum(1.0, np.abs(ta))) & (ta < t_max)
+    # the event rows of a table are left limits at the event instants: skip repeated times
+    if not match.any():
+        return math.nan
+    ia, ib = np.nonzero(match)[0], idx[match]
+    d = np.maximum.reduce(
+        [
+            np.abs(tr["x"][ia] - ref["x"][ib]),
+            np.abs(tr["y"][ia] - ref["y"][ib]),
+            radius * np.abs(tr["theta"][ia] - ref["theta"][ib]),
+        ]
+    )
+    return float(np.max(d))
+
+
+# ------------------------------------------------------------------------------------------
+# running
+
+
+def _median_run(fn: Callable[[], Trajectory], repeats: int) -> tuple[Trajectory, float]:
+    walls: list[float] = []
+    tr = None
+    for _ in range(max(1, repeats)):
+        t0 = time.perf_counter()
+        tr = fn()
+        walls.append(time.perf_counter() - t0)
+    assert tr is not None
+    return tr, statistics.median(walls)
+
+
+def _grid(scene: Scene, stop_time: float) -> np.ndarray:
+    dt = scene.integrator.output_interval
+    return np.arange(1, math.floor(stop_time / dt * (1 + 1e-12)) + 1) * dt
+
+
+def run_study(
+    scene: Scene,
+    out: Path | None = None,
+    *,
+    stop_time: float | None = None,
+    settings: dict[str, list[Any]] | None = None,
+    models: tuple[str, ...] | None = None,
+    repeats: int = 3,
+    ref_rtol: float | None = None,
+    ref_moreau_h: float | None = None,
+    quiet: bool = True,
+) -> Study:
+    """Run every integrator at every setting on every model and measure the errors. The
+    references default to a thousand times tighter than the tightest setting (rtol at most
+    1e-13, the Moreau step at least 1e-9 s)."""
+    settings = settings or DEFAULT_SETTINGS
+    if ref_rtol is None:
+        ref_rtol = max(
+            REF_RTOL, 1e-3 * min(settings.get("ME", []) + settings.get("CS", []) + [1e-10])
+        )
+    if ref_moreau_h is None:
+        ref_moreau_h = max(REF_MOREAU_H, 1e-3 * min(settings.get("Moreau", [1e-6])))
+    t_end = min(scene.stop_time, stop_time) if stop_time else default_horizon(scene)
+    sc = replace(scene, stop_time=t_end)
+    models = models or (*COMPLIANT, "Moreau")
+    radius = float(sc.parameter_values().get("contact.R1", 0.18))
+    grid = _grid(sc, t_end)
+    study = Study(scene=scene.name, stop_time=t_end)
+    total = sum(len(settings.get(i, [])) for i in ("ME", "CS", "RK4")) * sum(
+        m in COMPLIANT for m in models
+    ) + len(settings.get("Moreau", [])) * ("Moreau" in models)
+    progress = Progress(f"accuracy {scene.name}", quiet=quiet)
+    done = 0
+
+    def step() -> None:
+        nonlocal done
+        done += 1
+        progress.update(done / max(total, 1))
+
+    refs: dict[str, Trajectory] = {}
+    for model in models:
+        if model not in COMPLIANT:
+            continue
+        ref = simulate_me(sc, model, rtol=ref_rtol, output_times=grid)
+        half = simulate_me(sc, model, rtol=ref_rtol / 2, output_times=grid)
+        refs[model] = ref
+        study.references[model] = f"ME CVode rtol {ref_rtol:g} (check: {ref_rtol / 2:g})"
+        study.reference_checks[model] = _reference_change(half, ref, t_end, radius)
+        for integ in ("ME", "CS", "RK4"):
+            for setting in settings.get(integ, []):
+                study.points.append(
+                    _measure(sc, model, integ, setting, ref, grid, t_end, radius, repeats, ref_rtol)
+                )
+                step()
+    if "Moreau" in models:
+        ref = moreau(sc, h=ref_moreau_h, output_interval=sc.integrator.output_interval)
+        half = moreau(sc, h=ref_moreau_h / 2, output_interval=sc.integrator.output_interval)
+        study.references["Moreau"] = f"Moreau h = {ref_moreau_h:g} s (check: {ref_moreau_h / 2:g})"
+        study.reference_checks["Moreau"] = _reference_change(half, ref, t_end, radius)
+        compliant_ref = refs.get("LN_spheres")
+        for h in settings.get("Moreau", []):
+            tr, wall = _median_run(lambda h=h: moreau(sc, h=h), repeats)
+            study.points.append(
+                _point(
+                    "Moreau",
+                    "Moreau",
+                    h,
+                    f"h = {h:g} s",
+                    tr,
+                    wall,
+                    ref,
+                    t_end,
+                    radius,
+                    RIGID_METRICS,
+                )
+            )
+            if compliant_ref is not None:
+                study.points.append(
+                    _point(
+                        "Moreau",
+                        "Moreau",
+                        h,
+                        f"h = {h:g} s",
+                        tr,
+                        wall,
+                        compliant_ref,
+                        t_end,
+                        radius,
+                        RIGID_METRICS,
+                        vs="LN_spheres",
+                    )
+                )
+            step()
+    progress.close()
+    if out is not None:
+        write_report(study, out)
+    return study
+
+
+def default_horizon(scene: Scene) -> float:
+    """Long enough for the first three contacts (the end of the third, plus 20 %), at most the
+    scene's stop time: the metrics look no further, and the Moreau reference costs 1/h steps."""
+    probe = simulate_me(scene, "LN_spheres", rtol=1e-8)
+    ends = probe.contact_records["t_release"]
+    ends = ends[np.isfinite(ends)]
+    if len(ends) >= 3:
+        return float(min(scene.stop_time, 1.2 * ends[2]))
+    return scene.stop_time
+
+
+def _reference_change(
+    half: Trajectory, ref: Trajectory, t_end: float, radius: float
+) -> dict[str, float]:
+    errors = contact_errors(half, ref)
+    errors["trajectory"] = trajectory_error(half, ref, horizon(half, ref, t_end), radius)
+    return errors
+
+
+def _measure(
+    sc: Scene,
+    model: str,
+    integ: str,
+    setting: Any,
+    ref: Trajectory,
+    grid: np.ndarray,
+    t_end: float,
+    radius: float,
+    repeats: int,
+    ref_rtol: float,
+) -> Point:
+    if integ == "ME":
+        tr, wall = _median_run(
+            lambda: simulate_me(sc, model, rtol=setting, output_times=grid), repeats
+        )
+        return _point(model, "ME", setting, f"rtol = {setting:g}", tr, wall, ref, t_end, radius)
+    if integ == "CS":
+        tr, _ = _median_run(
+            lambda: simulate_cs(sc, model, rtol=setting, communication_step=CS_COMMUNICATION_STEP),
+            repeats,
+        )
+        wall = tr.stats["do_step_time"]  # time inside fmi2DoStep: the integration itself
+        return _point(
+            model,
+            "CS",
+            setting,
+            f"rtol = {setting:g}",
+            tr,
+            wall,
+            ref,
+            t_end,
+            radius,
+            ("contact_time", "rebound_velocity", "trajectory"),
+        )
+    h0, tol = setting
+    tr, wall = _median_run(lambda: rk4_event(sc, model, h0=h0, tol=tol), repeats)
+    # the scheme has no dense output: the reference is evaluated at its own record times
+    ref_here = simulate_me(sc, model, rtol=ref_rtol, output_times=tr.t)
+    ref_here.contact_records = ref.contact_records
+    return _point(
+        model, "RK4", h0, f"h0 = {h0:g} s, tol = {tol:g} m", tr, wall, ref_here, t_end, radius
+    )
+
+
+def _point(
+    model: str,
+    integ: str,
+    setting: float,
+    label: str,
+    tr: Trajectory,
+    wall: float,
+    ref: Trajectory,
+    t_end: float,
+    radius: float,
+    metrics: tuple[str, ...] = METRICS,
+    vs: str = "self",
+) -> Point:
+    errors = contact_errors(tr, ref)
+    errors["trajectory"] = trajectory_error(tr, ref, horizon(tr, ref, t_end), radius)
+    errors = {m: (errors[m] if m in metrics else math.nan) for m in METRICS}
+    return Point(
+        model=model,
+        integrator=integ,
+        setting=float(setting),
+        label=label,
+        wall_time=wall,
+        rhs_evaluations=int(tr.stats.get("rhs_evaluations", 0)),
+        steps=int(tr.stats.get("steps", 0)),
+        errors=errors,
+        vs=vs,
+    )
+
+
+# ------------------------------------------------------------------------------------------
+# convergence order and the report
+
+
+def observed_order(points: list[Point], metric: str) -> float:
+    """Slope of log(error) against log(setting) (rtol, h0 or h), least squares over the points
+    with a finite, positive error."""
+    xs = [math.log(p.setting) for p in points if p.errors[metric] > 0]
+    ys = [math.log(p.errors[metric]) for p in points if p.errors[metric] > 0]
+    if len(xs) < 2:
+        return math.nan
+    return float(np.polyfit(xs, ys, 1)[0])
+
+
+def _groups(study: Study) -> dict[tuple[str, str, str], list[Point]]:
+    groups: dict[tuple[str, str, str], list[Point]] = {}
+    for p in study.points:
+        groups.setdefault((p.model, p.integrator, p.vs), []).append(p)
+    return groups
+
+
+def write_report(study: Study, out: Path) -> list[Path]:
+    """report.md, accuracy.json and work-precision figures in `out`."""
+    from . import plots_accuracy
+
+    out.mkdir(parents=True, exist_ok=True)
+    files = plots_accuracy.work_precision(study, out)
+    data = {
+        "scene": study.scene,
+        "stop_time": study.stop_time,
+        "references": study.references,
+        "reference_checks": study.reference_checks,
+        "points": [p.__dict__ for p in study.points],
+        "orders": {
+            f"{m}/{i}/{v}": {k: observed_order(ps, k) for k in METRICS}
+            for (m, i, v), ps in _groups(study).items()
+        },
+    }
+    write_json(out / "accuracy.json", data)
+    files.append(out / "accuracy.json")
+    (out / "report.md").write_text(_markdown(study), encoding="utf-8")
+    files.append(out / "report.md")
+    return files
+
+
+def _fmt(x: float) -> str:
+    return "-" if not math.isfinite(x) else f"{x:.2e}"
+
+
+def _markdown(study: Study) -> str:
+    from . import accuracy_text
+
+    groups = _groups(study)
+    lines = [f"# Error against run time: scene `{study.scene}`", ""]
+    lines += accuracy_text.introduction(study)
+    lines += [
+        "",
+        "## References",
+        "",
+        "Each reference and the change of every metric when its setting is halved, against "
+        "the smallest error plotted for that model (the check passes below 1 %):",
+        "",
+        "| model | reference | metric | change on halving | smallest error plotted | ratio |",
+        "|---|---|---|---|---|---|",
+    ]
+    for model, change in study.reference_checks.items():
+        pts = [p for p in study.points if p.model == model and p.vs == "self"]
+        for metric, value in change.items():
+            smallest = min(
+                (p.errors[metric] for p in pts if p.errors[metric] > 0), default=math.nan
+            )
+            ratio = value / smallest if smallest and math.isfinite(smallest) else math.nan
+            verdict = "" if not math.isfinite(ratio) else (" ok" if ratio < 0.01 else " **no**")
+            lines.append(
+                f"| {model} | {study.references[model]} | {metric} | {_fmt(value)} | "
+                f"{_fmt(smallest)} | {_fmt(ratio)}{verdict} |"
+            )
+    lines += ["", "## Figures", ""]
+    for model in dict.fromkeys(p.model for p in study.points):
+        lines.append(f"![{model}](wp_{model}.png)")
+        lines.append("")
+    lines += [
+        "## Table",
+        "",
+        "Errors as defined above; cost as median wall time of the repeats and the number of "
+        "right-hand-side evaluations (including CVODE's difference-quotient Jacobian; one per "
+        "Moreau step).",
+        "",
+        "| model | integrator | setting | vs | wall [s] | RHS | steps | contact time [s] | "
+        "peak F_N | max ind. | rebound | trajectory [m] |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for p in study.points:
+        e = p.errors
+        lines.append(
+            f"| {p.model} | {p.integrator} | {p.label} | {p.vs} | {p.wall_time:.3g} | "
+            f"{p.rhs_evaluations} | {p.steps} | {_fmt(e['contact_time'])} | "
+            f"{_fmt(e['peak_F_N'])} | {_fmt(e['max_indentation'])} | "
+            f"{_fmt(e['rebound_velocity'])} | {_fmt(e['trajectory'])} |"
+        )
+    lines += [
+        "",
+        "## Observed order of convergence",
+        "",
+        "Least-squares slope of log(error) against log(setting): the setting is the relative "
+        "tolerance for ME and CS (1 means the error is proportional to the tolerance), the "
+        "nominal step h0 for RK4 (its event tolerance shrinks with it) and the step h for "
+        "Moreau.",
+        "",
+        "| model | integrator | vs | " + " | ".join(METRICS) + " |",
+        "|---|---|---|" + "---|" * len(METRICS),
+    ]
+    for (m, i, v), ps in groups.items():
+        orders = [observed_order(ps, k) for k in METRICS]
+        lines.append(
+            f"| {m} | {i} | {v} | "
+            + " | ".join("-" if not math.isfinite(o) else f"{o:.2f}" for o in orders)
+            + " |"
+        )
+    lines += [""]
+    lines += accuracy_text.conclusions(study, groups)
+    return "\n".join(lines) + "\n"

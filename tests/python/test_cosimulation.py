@@ -1,0 +1,407 @@
+"""Co-simulation of the csfh FMU: fmi2DoStep with CVODE inside the FMU.
+
+Accuracy against model exchange, contact onsets located inside communication steps (several per
+step), variable step sizes, rollback with fmi2Get/SetFMUstate in a master loop, a provoked CVODE
+failure, inputs held over the step, the default tolerance and the capability flags.
+
+Tolerances: "tight" is a relative tolerance of 1e-10 for both CVODEs (the FMU's, set with
+fmi2SetupExperiment; fmpy's in model exchange). CS onset times are read from the FMU's logEvents
+lines, which print the located event time with 17 digits (fmpy routes the log of every live
+instance to the last one created, so instances whose log is read run one after the other)."""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable
+from ctypes import byref, c_double
+from pathlib import Path
+from typing import Any
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+from fmpy.model_description import ModelDescription
+
+from csfh.scene import Scene, load_scene
+
+MakeFmu = Callable[..., tuple[Any, Any]]
+
+TIGHT = 1e-10
+STATES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
+ERROR = 3
+G = 9.81
+T_FIRST_CENTRAL = math.sqrt(2 * 0.03 / G)  # PHYSICS.md 7.1
+V_FIRST_CENTRAL = math.sqrt(2 * G * 0.03)
+RHO_MAX_CENTRAL = 1.19279e-4  # PHYSICS.md 7.2, K_spheres, m: the indentation scale
+
+
+# ------------------------------------------------------------------------------------------
+# helpers
+
+
+def apply_scene(fmu: FMU2Slave, md: ModelDescription, scene: Scene, law: str) -> None:
+    """The scene's parameters, initial state and inputs (in initialization mode)."""
+    types = {v.name: (v.valueReference, v.type) for v in md.modelVariables}
+    values: dict[str, Any] = dict(scene.parameter_values(law))
+    values.update(dict(zip(STATES, scene.x0, strict=True)))
+    values.update(scene.inputs)
+    for name, value in values.items():
+        ref, kind = types[name]
+        if kind == "Real":
+            fmu.setReal([ref], [float(value)])
+        elif kind == "Boolean":
+            fmu.setBoolean([ref], [bool(value)])
+        else:
+            fmu.setInteger([ref], [int(value)])
+
+
+def cs_instance(
+    make_fmu: MakeFmu,
+    md: ModelDescription,
+    scene: Scene,
+    tolerance: float | None = TIGHT,
+    law: str = "LN_spheres",
+    extra: dict[str, float] | None = None,
+) -> tuple[FMU2Slave, Any]:
+    """An initialized co-simulation instance that logs its events."""
+    fmu, log = make_fmu("CS")
+    fmu.setDebugLogging(True, ["logEvents"])
+    fmu.setupExperiment(tolerance=tolerance, startTime=0.0)
+    fmu.enterInitializationMode()
+    apply_scene(fmu, md, scene, law)
+    if extra:
+        refs = {v.name: v.valueReference for v in md.modelVariables}
+        fmu.setReal([refs[k] for k in extra], list(extra.values()))
+    fmu.exitInitializationMode()
+    return fmu, log
+
+
+def run(fmu: FMU2Slave, points: list[float] | np.ndarray, t: float = 0.0) -> float:
+    """fmi2DoStep from t through every communication point."""
+    for p in points:
+        fmu.doStep(t, p - t)
+        t = float(p)
+    return t
+
+
+def onsets(log: Any) -> np.ndarray:
+    """Contact onset times located inside the steps, from the FMU's logEvents lines."""
+    pattern = re.compile(r"t = (\S+): contact \d+ starts")
+    return np.array([float(m.group(1)) for _, _, msg in log.lines if (m := pattern.match(msg))])
+
+
+def states(fmu: FMU2Slave, vr: dict[str, int]) -> np.ndarray:
+    return np.array(fmu.getReal([vr[n] for n in STATES]))
+
+
+def grid(h: float, t_end: float) -> np.ndarray:
+    return np.arange(1, round(t_end / h) + 1) * h
+
+
+def me_onsets(
+    fmu_path: Path, scene: Scene, stop_time: float, law: str = "LN_spheres"
+) -> np.ndarray:
+    """Contact onsets in model exchange: fmpy.simulate_fmu with its CVode (BDF, root finding on
+    the event indicator) at rtol 1e-10; with record_events the row before a rise of
+    contact.count is the event instant."""
+    values: dict[str, Any] = dict(scene.parameter_values(law))
+    values.update(dict(zip(STATES, scene.x0, strict=True)))
+    result = fmpy.simulate_fmu(
+        str(fmu_path),
+        fmi_type="ModelExchange",
+        stop_time=stop_time,
+        relative_tolerance=TIGHT,
+        output_interval=1e-3,
+        start_values=values,
+        record_events=True,
+        output=["contact.count"],
+    )
+    rise = np.nonzero(np.diff(result["contact.count"]) > 0)[0]
+    return np.asarray(result["time"][rise], dtype=float)
+
+
+# ------------------------------------------------------------------------------------------
+# accuracy against model exchange
+
+
+@pytest.mark.parametrize("name", ["central", "asymmetric", "csfh"])
+def test_cs_matches_me_contact_times(
+    make_fmu: MakeFmu, model_description: ModelDescription, fmu_path: Path, name: str
+) -> None:
+    """CS (FMU's CVODE) and ME (fmpy's CVode), both at rtol 1e-10, 1 s: the contact sequences
+    agree up to the first contact whose time differs by 1 % (impacts make the motion chaotic),
+    and the first three contact times agree within 1e-6 s."""
+    scene = load_scene(name)
+    me = me_onsets(fmu_path, scene, 1.0)
+    fmu, log = cs_instance(make_fmu, model_description, scene)
+    run(fmu, grid(1e-3, 1.0))
+    cs = onsets(log)
+    assert len(me) >= 3 and len(cs) >= 3
+    n = min(len(me), len(cs))
+    diverged = np.nonzero(np.abs(cs[:n] - me[:n]) > 0.01 * me[:n])[0]
+    agree = int(diverged[0]) if len(diverged) else n
+    assert agree >= 3, (cs[: agree + 1], me[: agree + 1])
+    np.testing.assert_allclose(cs[:3], me[:3], rtol=0, atol=1e-6)
+
+
+def test_onset_located_well_below_the_indentation_scale(
+    make_fmu: MakeFmu, model_description: ModelDescription
+) -> None:
+    """At the default tolerance (1e-6) the first central onset is at the analytic instant to
+    within 1e-3 of the indentation scale (|dt| v_imp < 1e-3 rho_max = 1.2e-7 m), although the
+    step (1e-2 s) is 20 times the contact duration, and the onset indentation rate is captured
+    (PHYSICS.md 7.1: 0.767203 m/s)."""
+    scene = load_scene("central")
+    fmu, log = cs_instance(make_fmu, model_description, scene, tolerance=None)
+    refs = {v.name: v.valueReference for v in model_description.modelVariables}
+    t = run(fmu, grid(1e-2, 0.07))
+    fmu.doStep(t, 0.0785 - t)  # ends inside the first contact (4.6e-4 s long)
+    (t_on,) = onsets(log)
+    assert abs(t_on - T_FIRST_CENTRAL) * V_FIRST_CENTRAL < 1e-3 * RHO_MAX_CENTRAL
+    assert fmu.getBoolean([refs["contact.active"]])[0]
+    speed = fmu.getReal([refs["contact.onset_speed"]])[0]
+    assert speed == pytest.approx(V_FIRST_CENTRAL, rel=1e-4)
+
+
+def test_many_contacts_in_one_communication_step(
+    make_fmu: MakeFmu, model_description: ModelDescription, fmu_path: Path
+) -> None:
+    """Steps of 0.1 s on the central scene for 1.6 s (the bounces crowd towards the end: up to
+    seven contacts in the last step): every contact inside a step is found (the count after
+    each step equals model exchange's) and located as with 1e-3 s steps."""
+    scene = load_scene("central")
+    refs = {v.name: v.valueReference for v in model_description.modelVariables}
+    me = me_onsets(fmu_path, scene, 1.6)
+    fmu, log = cs_instance(make_fmu, model_description, scene)
+    counts = []
+    t = 0.0
+    for p in grid(0.1, 1.6):
+        t = run(fmu, [p], t)
+        counts.append(fmu.getInteger([refs["contact.count"]])[0])
+    me_counts = [int(np.sum(me <= p + 1e-12)) for p in grid(0.1, 1.6)]
+    assert counts == me_counts
+    assert max(np.diff([0, *counts])) >= 5, "some step must hold many contacts"
+    coarse = onsets(log)
+    fine, fine_log = cs_instance(make_fmu, model_description, scene)
+    run(fine, grid(1e-3, 1.6))
+    np.testing.assert_allclose(coarse, onsets(fine_log), rtol=0, atol=1e-6)
+    np.testing.assert_allclose(coarse[:3], me[:3], rtol=0, atol=1e-6)
+
+
+# ------------------------------------------------------------------------------------------
+# communication steps, rollback
+
+
+def test_variable_step_sizes_give_the_fixed_step_trajectory(
+    make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int]
+) -> None:
+    """Random step sizes (1e-4 s to 0.1 s) against fixed 1e-3 s steps on the csfh scene: the
+    same contacts and, at every 0.1 s, the same state within 1e-8 m (rtol 1e-10; only CVODE's
+    path differs, it stops at other communication points)."""
+    scene = load_scene("csfh")
+    blocks = [0.1 * k for k in range(1, 6)]
+    fixed, fixed_log = cs_instance(make_fmu, model_description, scene)
+    reference = []
+    t = 0.0
+    for _ in blocks:
+        t = run(fixed, grid(1e-3, 0.1) + t, t)
+        reference.append(states(fixed, vr))
+    fixed_onsets = onsets(fixed_log)
+    rng = np.random.default_rng(7)
+    variable, variable_log = cs_instance(make_fmu, model_description, scene)
+    t, sizes = 0.0, []
+    for end, a in zip(blocks, reference, strict=True):
+        cuts = np.sort(rng.uniform(end - 0.1, end, size=rng.integers(2, 30)))
+        points = [*cuts, end]
+        sizes += list(np.diff([t, *points]))
+        t = run(variable, points, t)
+        b = states(variable, vr)
+        np.testing.assert_allclose(b[:3], a[:3], rtol=0, atol=1e-8)
+        np.testing.assert_allclose(b[3:], a[3:], rtol=0, atol=1e-6)
+    assert min(sizes) < 1e-3 < max(sizes)
+    assert len(fixed_onsets) >= 5
+    np.testing.assert_allclose(onsets(variable_log), fixed_onsets, rtol=0, atol=1e-8)
+
+
+def test_rollback_in_a_master_loop(
+    make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int]
+) -> None:
+    """A master that rejects every 0.02 s step in which a contact starts, restores the FMU state
+    from before the step and redoes it in ten substeps. The rollback is invisible (time, states
+    and discrete state come back exactly), and the result is bitwise that of a master taking the
+    same accepted steps directly (fmi2GetFMUstate restarts CVODE, so the reference takes the
+    state at the same points)."""
+    scene = load_scene("central")
+    h, t_end = 0.02, 0.6
+
+    def master(rollback: bool, refine: set[int]) -> tuple[np.ndarray, set[int]]:
+        fmu, _ = cs_instance(make_fmu, model_description, scene, tolerance=1e-8)
+        t, rows, refined = 0.0, [], set()
+        for k in range(round(t_end / h)):
+            saved = fmu.getFMUstate()
+            before = (
+                fmu.getInteger([vr["contact.count"]])[0],
+                states(fmu, vr),
+                fmu.getReal([vr["time"]])[0],
+            )
+            substeps = k in refine
+            if rollback:
+                fmu.doStep(t, h)
+                if fmu.getInteger([vr["contact.count"]])[0] > before[0]:  # reject the step
+                    fmu.setFMUstate(saved)
+                    assert fmu.getReal([vr["time"]])[0] == before[2]
+                    assert fmu.getInteger([vr["contact.count"]])[0] == before[0]
+                    np.testing.assert_array_equal(states(fmu, vr), before[1])
+                    substeps = True
+            elif not substeps:
+                fmu.doStep(t, h)
+            if substeps:
+                refined.add(k)
+                run(fmu, t + np.arange(1, 11) * h / 10, t)
+            fmu.freeFMUstate(saved)
+            t = (k + 1) * h
+            rows.append([*states(fmu, vr), fmu.getInteger([vr["contact.count"]])[0]])
+        return np.array(rows), refined
+
+    with_rollback, refined = master(True, set())
+    assert len(refined) >= 3
+    direct, _ = master(False, refined)
+    np.testing.assert_array_equal(with_rollback, direct)
+
+
+def test_cvode_failure_is_an_error_with_cvodes_message(
+    make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int]
+) -> None:
+    """An input of 1e308 N is finite (accepted), but no step can follow it: CVODE fails. The
+    step returns fmi2Error, the log has CVODE's own message and return flag, the instance holds
+    the last successful state (finite, consistent with fmi2LastSuccessfulTime), refuses further
+    steps, and a rollback to a saved state recovers it exactly."""
+    scene = load_scene("central")
+    fmu, log = cs_instance(make_fmu, model_description, scene, tolerance=1e-8)
+    t = run(fmu, grid(1e-2, 0.05))
+    saved = fmu.getFMUstate()
+    before = states(fmu, vr)
+    fmu.setReal([vr["F_ext[2]"]], [1e308])
+    with pytest.raises(FMICallException) as info:
+        fmu.doStep(t, 1e-2)
+    assert info.value.status == ERROR
+    errors = log.errors()
+    assert any(m.startswith("CVODE CVode: ") for m in errors), errors  # CVODE's own text
+    assert any(re.search(r"CVode failed with CV_[A-Z_]+", m) for m in errors), errors
+    now = fmu.getReal([vr["time"]])[0]
+    x = states(fmu, vr)
+    assert np.all(np.isfinite(x)) and t <= now < t + 1e-2
+    status = c_double()
+    fmu.fmi2GetRealStatus(fmu.component, 2, byref(status))  # fmi2LastSuccessfulTime
+    assert status.value == now
+    with pytest.raises(FMICallException):
+        fmu.doStep(now, 1e-2)
+    assert "illegal call in state StepFailed" in log.text()
+
+    fmu.setFMUstate(saved)  # rollback
+    fmu.freeFMUstate(saved)
+    np.testing.assert_array_equal(states(fmu, vr), before)
+    fmu.setReal([vr["F_ext[2]"]], [0.0])
+    run(fmu, t + grid(1e-2, 0.05), t)
+    reference, _ = cs_instance(make_fmu, model_description, scene, tolerance=1e-8)
+    t = run(reference, grid(1e-2, 0.05))
+    reference.freeFMUstate(reference.getFMUstate())  # the same CVODE restart as above
+    run(reference, t + grid(1e-2, 0.05), t)
+    np.testing.assert_array_equal(states(fmu, vr), states(reference, vr))
+
+
+# ------------------------------------------------------------------------------------------
+# inputs, tolerance, capabilities
+
+
+def test_inputs_are_held_over_the_step_free_flight(
+    make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int]
+) -> None:
+    """No contact law, no flexure: body 1 flies freely under gravity and the inputs. Inputs set
+    at a communication point are held over the step (zero-order hold), so the motion is the
+    analytic piecewise parabola, whatever the step: F_ext = [3, 5] N, M_ext = 0.2 N m until
+    0.25 s, then F_ext = [-2, 0] N, M_ext = 0."""
+    scene = load_scene("central")
+    m, inertia = 10.0, 0.1617
+    fmu, _ = make_fmu("CS")
+    fmu.setupExperiment(tolerance=TIGHT, startTime=0.0)
+    fmu.enterInitializationMode()
+    apply_scene(fmu, model_description, scene, "LN_spheres")
+    fmu.setInteger([vr["contact.law"]], [1])  # none: no contact at all
+    fmu.setReal([vr["body1.vx"]], [0.1])
+    fmu.exitInitializationMode()
+
+    def analytic(t: float) -> np.ndarray:
+        def phase(x0: np.ndarray, F: tuple[float, float, float], dt: float) -> np.ndarray:
+            acc = np.array([F[0] / m, F[1] / m - G, F[2] / inertia])
+            return np.concatenate([x0[:3] + x0[3:] * dt + 0.5 * acc * dt**2, x0[3:] + acc * dt])
+
+        x0 = np.array([0.0, 0.01, 0.0, 0.1, 0.0, 0.0])
+        if t <= 0.25:
+            return phase(x0, (3.0, 5.0, 0.2), t)
+        return phase(phase(x0, (3.0, 5.0, 0.2), 0.25), (-2.0, 0.0, 0.0), t - 0.25)
+
+    inputs = [vr["F_ext[1]"], vr["F_ext[2]"], vr["M_ext"]]
+    fmu.setReal(inputs, [3.0, 5.0, 0.2])
+    t = 0.0
+    for p in (0.01, 0.05, 0.125, 0.25, 0.26, 0.3, 0.4):
+        if t == 0.25:
+            fmu.setReal(inputs, [-2.0, 0.0, 0.0])
+        t = run(fmu, [p], t)
+        np.testing.assert_allclose(states(fmu, vr), analytic(t), rtol=0, atol=1e-9)
+
+
+def test_default_tolerance_is_1e_6(
+    make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int]
+) -> None:
+    """Without a tolerance from fmi2SetupExperiment the FMU uses 1e-6 (the DefaultExperiment
+    tolerance of modelDescription.xml): bitwise the run with tolerance 1e-6, not that with 1e-8."""
+    assert model_description.defaultExperiment.tolerance == "1e-06"
+    scene = load_scene("csfh")
+    result = {}
+    for tol in (None, 1e-6, 1e-8):
+        fmu, _ = cs_instance(make_fmu, model_description, scene, tolerance=tol)
+        run(fmu, grid(1e-2, 0.3))
+        result[tol] = states(fmu, vr)
+    np.testing.assert_array_equal(result[None], result[1e-6])
+    assert not np.array_equal(result[None], result[1e-8])
+
+
+def test_capability_flags_say_what_is_supported(
+    make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int]
+) -> None:
+    """Every <CoSimulation> flag matches the behaviour: the false ones are refused with
+    fmi2Error, the true ones work."""
+    cs = model_description.coSimulation
+    assert cs.canHandleVariableCommunicationStepSize  # test_variable_step_sizes_...
+    assert cs.canGetAndSetFMUstate and cs.canSerializeFMUstate  # rollback tests
+    assert cs.canNotUseMemoryManagementFunctions
+    assert not cs.canBeInstantiatedOnlyOncePerProcess
+    assert not cs.canInterpolateInputs and cs.maxOutputDerivativeOrder == 0
+    assert not cs.canRunAsynchronuously and not cs.providesDirectionalDerivative
+
+    first, _ = cs_instance(make_fmu, model_description, load_scene("central"))
+    fmu, log = cs_instance(make_fmu, model_description, load_scene("csfh"))  # two at once
+    fmu.doStep(0.0, 1e-3)
+    first.doStep(0.0, 5e-3)
+    fmu.doStep(1e-3, 4e-3)  # another step size
+    assert fmu.getReal([vr["body1.x"]])[0] != first.getReal([vr["body1.x"]])[0]
+    state = fmu.getFMUstate()
+    fmu.deSerializeFMUstate(fmu.serializeFMUstate(state))
+    fmu.setFMUstate(state)
+
+    ref = [vr["F_ext[1]"]]
+    refused = {
+        "fmi2SetRealInputDerivatives": lambda: fmu.setRealInputDerivatives(ref, [1], [0.0]),
+        "fmi2GetRealOutputDerivatives": lambda: fmu.getRealOutputDerivatives(ref, [1]),
+        "fmi2CancelStep": fmu.cancelStep,
+        "fmi2GetDirectionalDerivative": lambda: fmu.getDirectionalDerivative(ref, ref, [1.0]),
+    }
+    for name, call in refused.items():
+        with pytest.raises(FMICallException) as info:
+            call()
+        assert info.value.status == ERROR, name
+        assert name in log.errors()[-1], (name, log.errors())
