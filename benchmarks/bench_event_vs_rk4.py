@@ -1,6 +1,7 @@
-"""The FMU's event-driven integration (co-simulation: CVODE BDF inside the FMU, contact onsets by
-root finding) against the paper's scheme (explicit RK4 with step bisection to the event
-tolerance, in C with the same right-hand side), at equal error on the first three contacts.
+"""The FMU's event-driven integration (co-simulation: CVODE inside the FMU with its default
+method, auto; contact onsets by root finding) against the paper's scheme (explicit RK4 with step
+bisection to the event tolerance, in C with the same right-hand side), at equal error on the
+first three contacts.
 
 For each RK4 setting (the paper's h0 = 2e-4 s, 1e-4 m, and tighter ones) the error is the largest
 contact-time error of the first three contacts against a reference (model exchange at rtol 1e-13).

@@ -49,4 +49,5 @@ const fmu_model_t fmu_model = {
     .event_update = NULL,
     .outputs = outputs,
     .add_integrator_steps = NULL,
+    .cs_method = NULL,
 };

@@ -79,6 +79,7 @@ typedef struct {
     csfh_discrete_t z;
     csfh_outputs_t out;
     csfh_counters_t counters;
+    int cs_method;      /* solver.method (CvodeMethod): read by the co-simulation glue only */
 } csfh_model_t;
 
 /* Contact force evaluation at one state (for outputs and the Moreau harness). */

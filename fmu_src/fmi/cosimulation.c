@@ -1,14 +1,27 @@
-/* Co-simulation: fmi2DoStep integrates the model with SUNDIALS CVODE (BDF, dense direct linear
- * solver, difference-quotient Jacobian) and locates every event inside the step by root finding
- * on the model-exchange event indicators (csfh: the gap, so every contact onset and release). At
- * each root the discrete state is updated (csfh: the onset indentation rate is captured) and
- * CVODE is re-initialised; the step then continues to its end, however many events it holds.
+/* Co-simulation: fmi2DoStep integrates the model with SUNDIALS CVODE and locates every event
+ * inside the step by root finding on the model-exchange event indicators (csfh: the gap, so
+ * every contact onset and release). At each root the discrete state is updated (csfh: the onset
+ * indentation rate is captured) and CVODE is re-initialised; the step then continues to its end,
+ * however many events it holds.
+ *
+ * Method (fmu_model.cs_method; csfh: parameter solver.method):
+ *   BDF    BDF with Newton iteration, dense direct linear solver, difference-quotient Jacobian;
+ *   Adams  Adams-Moulton with fixed-point iteration: no Jacobian and no linear algebra, the
+ *          cheaper choice while the motion is not stiff (flight, impacts resolved in time);
+ *   auto   Adams; where it struggles (more than AUTO_SUSPECT_FAILED of the steps of a window of
+ *          AUTO_WINDOW steps fail, fixed-point convergence or error test), BDF is tried for
+ *          two windows (start-up, then measured) and kept if its mean step is more than
+ *          AUTO_BDF_COST times Adams' (a BDF step costs about that much more: Newton iteration
+ *          and linear algebra), i.e. where the motion is stiff (resting or rolling contact);
+ *          otherwise back to Adams, with the next trial after 1, 2, 4, ... windows. Every
+ *          event restarts with Adams.
  *
  * Inputs are held constant over the communication step (zero-order hold); a changed input value,
  * a changed state or tunable parameter, and fmi2Get/SetFMUstate restart CVODE at the
- * communication point, so that BDF never reaches across a discontinuity of the right-hand side.
- * Tolerances: relative = the fmi2SetupExperiment tolerance (FMU_DEFAULT_TOLERANCE = 1e-6 when
- * none is given), absolute = relative x the nominal value of each state.
+ * communication point, so that the multistep history never reaches across a discontinuity of
+ * the right-hand side. Tolerances: relative = the fmi2SetupExperiment tolerance
+ * (FMU_DEFAULT_TOLERANCE = 1e-6 when none is given), absolute = relative x the nominal value of
+ * each state.
  *
  * A CVODE failure returns fmi2Error with CVODE's own message and return flag in the log; the
  * instance then holds the last state CVODE reached successfully, at that time (also reported by
@@ -26,12 +39,17 @@
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include "fmu_instance.h"
 
 #define NX fmu_model.n_states
 #define MAX_EVENTS_PER_STEP 1000000L  /* guards against an endless chain of events */
-#define MAX_STEPS_PER_CALL 500000L    /* CVODE steps per CVode() call */
+#define MAX_STEPS_PER_CALL 500000L    /* CVODE steps per fmi2DoStep */
+#define AUTO_WINDOW 100L              /* auto: steps per decision */
+#define AUTO_SUSPECT_FAILED 0.05      /* auto: failed fraction of an Adams window that triggers a trial */
+#define AUTO_BDF_COST 1.5             /* auto: cost of a BDF step over an Adams step */
+#define AUTO_MAX_HOLDOFF 64           /* auto: most windows between two trials */
 
 struct csfh_cvode {
     SUNContext ctx;
@@ -40,6 +58,15 @@ struct csfh_cvode {
     N_Vector abstol;
     SUNMatrix J;
     SUNLinearSolver LS;
+    SUNNonlinearSolver NLS; /* fixed-point iteration (Adams) */
+    int method;             /* FMU_CS_BDF or FMU_CS_ADAMS: the method CVODE was created with */
+    long window_steps;      /* auto: CVODE's step and failure counts and the time at the start */
+    long window_fails;      /*       of the current window */
+    double window_t0;
+    int trial;              /* auto: 0, or BDF on trial: 1 starting up, 2 measured */
+    int holdoff;            /* auto: Adams windows left before the next trial */
+    int next_holdoff;
+    double adams_h;         /* auto: mean Adams step of the window before the trial, s */
     double tolerance; /* the relative tolerance the solver was set up with */
     long counted_steps; /* CVODE steps already added to the model's counter */
 };
@@ -84,6 +111,9 @@ void cs_free(fmu_instance_t *inst)
     if (cv->LS != NULL) {
         SUNLinSolFree(cv->LS);
     }
+    if (cv->NLS != NULL) {
+        SUNNonlinSolFree(cv->NLS);
+    }
     if (cv->J != NULL) {
         SUNMatDestroy(cv->J);
     }
@@ -112,7 +142,68 @@ static fmi2Status cv_check(fmu_instance_t *inst, int flag, const char *call)
     return fmi2Error;
 }
 
-/* Create CVODE (first step) or re-initialise it at the current state. */
+/* auto: a new window of steps (CVODE's counters restart with every (re)initialisation). */
+static void start_window(csfh_cvode_t *cv, double t)
+{
+    cv->window_steps = 0;
+    cv->window_fails = 0;
+    cv->window_t0 = t;
+}
+
+/* auto: a new segment of smooth motion (start, event, restart): no trial, no hold-off. */
+static void start_segment(csfh_cvode_t *cv, double t)
+{
+    start_window(cv, t);
+    cv->trial = 0;
+    cv->holdoff = 0;
+    cv->next_holdoff = 1;
+}
+
+static int configured_method(const fmu_instance_t *inst)
+{
+    return fmu_model.cs_method != NULL ? fmu_model.cs_method(inst->model) : FMU_CS_BDF;
+}
+
+/* (Re)create CVODE's memory with `method` (FMU_CS_BDF or FMU_CS_ADAMS) at the FMU's time and
+ * state; the vectors, the matrix and the solvers are kept from one method to the next. */
+static fmi2Status cv_create(fmu_instance_t *inst, int method)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    if (cv->mem != NULL) {
+        CVodeFree(&cv->mem);
+    }
+    memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
+    cv->mem = CVodeCreate(method == FMU_CS_ADAMS ? CV_ADAMS : CV_BDF, cv->ctx);
+    if (method == FMU_CS_ADAMS && cv->NLS == NULL) {
+        cv->NLS = SUNNonlinSol_FixedPoint(cv->y, 0, cv->ctx);
+    }
+    if (method != FMU_CS_ADAMS && cv->J == NULL) {
+        cv->J = SUNDenseMatrix(NX, NX, cv->ctx);
+        cv->LS = cv->J != NULL ? SUNLinSol_Dense(cv->y, cv->J, cv->ctx) : NULL;
+    }
+    if (cv->mem == NULL || (method == FMU_CS_ADAMS ? cv->NLS == NULL : cv->LS == NULL)) {
+        fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate CVODE");
+        return fmi2Error;
+    }
+    cv->method = method;
+    cv->counted_steps = 0;
+    start_window(cv, *fmu_time(inst));
+    fmi2Status s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
+    if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, *fmu_time(inst), cv->y), "CVodeInit");
+    if (s == fmi2OK) s = cv_check(inst, CVodeSetUserData(cv->mem, inst), "CVodeSetUserData");
+    if (s == fmi2OK) s = cv_check(inst, CVodeSVtolerances(cv->mem, inst->tolerance, cv->abstol), "CVodeSVtolerances");
+    if (s == fmi2OK && method == FMU_CS_ADAMS) {
+        s = cv_check(inst, CVodeSetNonlinearSolver(cv->mem, cv->NLS), "CVodeSetNonlinearSolver");
+    } else if (s == fmi2OK) {
+        s = cv_check(inst, CVodeSetLinearSolver(cv->mem, cv->LS, cv->J), "CVodeSetLinearSolver");
+    }
+    if (s == fmi2OK) s = cv_check(inst, CVodeRootInit(cv->mem, fmu_model.n_event_indicators, roots), "CVodeRootInit");
+    if (s == fmi2OK) s = cv_check(inst, CVodeSetNoInactiveRootWarn(cv->mem), "CVodeSetNoInactiveRootWarn");
+    return s;
+}
+
+/* Create CVODE (first step) or re-initialise it at the current state, with the configured
+ * method (auto starts with Adams). */
 static fmi2Status cs_start(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
@@ -120,58 +211,53 @@ static fmi2Status cs_start(fmu_instance_t *inst)
         cs_free(inst);
         cv = NULL;
     }
-    if (cv != NULL) {
+    const int method = configured_method(inst) == FMU_CS_BDF ? FMU_CS_BDF : FMU_CS_ADAMS;
+    if (cv != NULL && cv->mem != NULL && cv->method == method) {
         memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
         cv->counted_steps = 0;
+        start_segment(cv, *fmu_time(inst));
         return cv_check(inst, CVodeReInit(cv->mem, *fmu_time(inst), cv->y), "CVodeReInit");
     }
-    cv = (csfh_cvode_t *)calloc(1, sizeof(*cv));
     if (cv == NULL) {
-        fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: out of memory");
-        return fmi2Error;
-    }
-    inst->cvode = cv;
-    cv->tolerance = inst->tolerance;
-    if (SUNContext_Create(NULL, &cv->ctx) != 0) {
-        fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: SUNContext_Create failed");
-        cs_free(inst);
-        return fmi2Error;
-    }
-    cv->y = N_VNew_Serial(NX, cv->ctx);
-    cv->abstol = N_VNew_Serial(NX, cv->ctx);
-    cv->J = SUNDenseMatrix(NX, NX, cv->ctx);
-    cv->mem = CVodeCreate(CV_BDF, cv->ctx);
-    if (cv->y == NULL || cv->abstol == NULL || cv->J == NULL || cv->mem == NULL) {
-        fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate CVODE");
-        cs_free(inst);
-        return fmi2Error;
-    }
-    cv->LS = SUNLinSol_Dense(cv->y, cv->J, cv->ctx);
-    memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
-    /* absolute tolerance: relative tolerance times the nominal value of each state */
-    double *atol = N_VGetArrayPointer(cv->abstol);
-    int k = 0;
-    for (int i = 0; i < fmu_model.n_variables && k < NX; i++) {
-        if (fmu_model.variables[i].is_state) {
-            atol[k++] = inst->tolerance * fmu_model.variables[i].nominal;
+        cv = (csfh_cvode_t *)calloc(1, sizeof(*cv));
+        if (cv == NULL) {
+            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: out of memory");
+            return fmi2Error;
+        }
+        inst->cvode = cv;
+        cv->tolerance = inst->tolerance;
+        if (SUNContext_Create(NULL, &cv->ctx) != 0) {
+            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: SUNContext_Create failed");
+            cs_free(inst);
+            return fmi2Error;
+        }
+        cv->y = N_VNew_Serial(NX, cv->ctx);
+        cv->abstol = N_VNew_Serial(NX, cv->ctx);
+        if (cv->y == NULL || cv->abstol == NULL) {
+            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate CVODE");
+            cs_free(inst);
+            return fmi2Error;
+        }
+        /* absolute tolerance: relative tolerance times the nominal value of each state */
+        double *atol = N_VGetArrayPointer(cv->abstol);
+        int k = 0;
+        for (int i = 0; i < fmu_model.n_variables && k < NX; i++) {
+            if (fmu_model.variables[i].is_state) {
+                atol[k++] = inst->tolerance * fmu_model.variables[i].nominal;
+            }
         }
     }
-    fmi2Status s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
-    if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, *fmu_time(inst), cv->y), "CVodeInit");
-    if (s == fmi2OK) s = cv_check(inst, CVodeSetUserData(cv->mem, inst), "CVodeSetUserData");
-    if (s == fmi2OK) s = cv_check(inst, CVodeSVtolerances(cv->mem, inst->tolerance, cv->abstol), "CVodeSVtolerances");
-    if (s == fmi2OK) s = cv_check(inst, CVodeSetLinearSolver(cv->mem, cv->LS, cv->J), "CVodeSetLinearSolver");
-    if (s == fmi2OK) s = cv_check(inst, CVodeRootInit(cv->mem, fmu_model.n_event_indicators, roots), "CVodeRootInit");
-    if (s == fmi2OK) s = cv_check(inst, CVodeSetNoInactiveRootWarn(cv->mem), "CVodeSetNoInactiveRootWarn");
-    if (s == fmi2OK) s = cv_check(inst, CVodeSetMaxNumSteps(cv->mem, MAX_STEPS_PER_CALL), "CVodeSetMaxNumSteps");
+    const fmi2Status s = cv_create(inst, method);
     if (s != fmi2OK) {
         cs_free(inst);
+        return s;
     }
+    start_segment(inst->cvode, *fmu_time(inst));
     return s;
 }
 
 /* Add the CVODE steps taken since the last call to the model's step counter. */
-static void count_steps(fmu_instance_t *inst)
+static long count_steps(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
     long nsteps = 0;
@@ -181,6 +267,58 @@ static void count_steps(fmu_instance_t *inst)
     if (fmu_model.add_integrator_steps != NULL) {
         fmu_model.add_integrator_steps(inst->model, added);
     }
+    return added;
+}
+
+/* auto: at the end of each window of AUTO_WINDOW steps, the method for the next window; writes
+ * what it decided to `why` (empty when nothing changes). */
+static int auto_choose(csfh_cvode_t *cv, double t, char *why, size_t why_size)
+{
+    why[0] = '\0';
+    long nsteps = 0, nconv = 0, nerr = 0;
+    CVodeGetNumSteps(cv->mem, &nsteps);
+    const long steps = nsteps - cv->window_steps;
+    if (steps < AUTO_WINDOW) {
+        return cv->method;
+    }
+    CVodeGetNumNonlinSolvConvFails(cv->mem, &nconv);
+    CVodeGetNumErrTestFails(cv->mem, &nerr);
+    const double failed = (double)(nconv + nerr - cv->window_fails) / (double)steps;
+    const double mean_h = (t - cv->window_t0) / (double)steps;
+    cv->window_steps = nsteps;
+    cv->window_fails = nconv + nerr;
+    cv->window_t0 = t;
+    if (cv->method == FMU_CS_ADAMS) {
+        if (cv->holdoff > 0) {
+            cv->holdoff--;
+        } else if (failed > AUTO_SUSPECT_FAILED) {
+            cv->adams_h = mean_h;
+            cv->trial = 1;
+            snprintf(why, why_size,
+                     "t = %.17g: auto: trying BDF (%.0f %% of Adams' steps failed, mean step %.3g s)",
+                     t, 100.0 * failed, mean_h);
+            return FMU_CS_BDF;
+        }
+        return FMU_CS_ADAMS;
+    }
+    if (cv->trial == 1) { /* BDF's start-up window: not measured */
+        cv->trial = 2;
+        return FMU_CS_BDF;
+    }
+    if (cv->trial == 2) {
+        cv->trial = 0;
+        if (mean_h > AUTO_BDF_COST * cv->adams_h) {
+            snprintf(why, why_size, "t = %.17g: auto: BDF kept (stiff: mean step %.3g s, Adams %.3g s)",
+                     t, mean_h, cv->adams_h);
+            return FMU_CS_BDF;
+        }
+        cv->holdoff = cv->next_holdoff;
+        cv->next_holdoff = cv->next_holdoff < AUTO_MAX_HOLDOFF ? 2 * cv->next_holdoff : AUTO_MAX_HOLDOFF;
+        snprintf(why, why_size, "t = %.17g: auto: back to Adams (BDF's mean step %.3g s, Adams %.3g s)",
+                 t, mean_h, cv->adams_h);
+        return FMU_CS_ADAMS;
+    }
+    return FMU_CS_BDF;
 }
 
 /* Take CVODE's solution (tret, y) as the model's time and state. */
@@ -227,11 +365,14 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
     if (cv_check(inst, CVodeSetStopTime(cv->mem, t_end), "CVodeSetStopTime") != fmi2OK) {
         return fmi2Error;
     }
-    long events = 0;
+    const int automatic = configured_method(inst) == FMU_CS_AUTO;
+    long events = 0, steps = 0;
     double tret = now;
     while (tret < t_end) {
-        const int flag = CVode(cv->mem, t_end, cv->y, &tret, CV_NORMAL);
-        count_steps(inst);
+        /* one internal step per call: the solution is taken at every step, and auto can check
+         * the stiffness without waiting for the end of the communication step */
+        const int flag = CVode(cv->mem, t_end, cv->y, &tret, CV_ONE_STEP);
+        steps += count_steps(inst);
         if (flag < 0) {
             /* CVODE's message is already in the log (error_handler); add the flag. CVODE returns
              * the last successful point in (tret, y): keep it, so that what the master reads is
@@ -253,6 +394,18 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             return fmi2Error;
         }
         take_solution(inst, tret);
+        if (flag == CV_TSTOP_RETURN) {
+            break;
+        }
+        if (steps > MAX_STEPS_PER_CALL) {
+            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
+                    "fmi2DoStep: more than %ld CVODE steps in the step from t = %.17g to %.17g; "
+                    "the FMU holds the state at t = %.17g",
+                    MAX_STEPS_PER_CALL, t, t_end, tret);
+            inst->cvode_needs_reinit = 1;
+            return fmi2Error;
+        }
+        int restart = 0;
         if (flag == CV_ROOT_RETURN) {
             if (++events > MAX_EVENTS_PER_STEP) {
                 fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
@@ -261,15 +414,35 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
                 inst->cvode_needs_reinit = 1;
                 return fmi2Error;
             }
-            if (fmu_event_update(inst) != 0) {
-                /* the discrete state changed: restart the integrator at the event */
-                cv->counted_steps = 0;
-                if (cv_check(inst, CVodeReInit(cv->mem, tret, cv->y), "CVodeReInit") != fmi2OK ||
-                    cv_check(inst, CVodeSetStopTime(cv->mem, t_end), "CVodeSetStopTime") != fmi2OK) {
-                    inst->cvode_needs_reinit = 1;
-                    return fmi2Error;
-                }
+            /* the discrete state changed: restart the integrator at the event (auto: with
+             * Adams again) */
+            restart = fmu_event_update(inst) != 0;
+        }
+        fmi2Status s = fmi2OK;
+        if (restart && automatic && cv->method != FMU_CS_ADAMS) {
+            s = cv_create(inst, FMU_CS_ADAMS);
+            start_segment(cv, tret);
+        } else if (restart) {
+            cv->counted_steps = 0;
+            start_segment(cv, tret);
+            s = cv_check(inst, CVodeReInit(cv->mem, tret, cv->y), "CVodeReInit");
+        } else if (automatic) {
+            char why[160];
+            const int method = auto_choose(cv, tret, why, sizeof(why));
+            if (why[0] != '\0') {
+                fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", why);
             }
+            if (method == cv->method) {
+                continue;
+            }
+            s = cv_create(inst, method);
+        } else {
+            continue;
+        }
+        if (s != fmi2OK ||
+            cv_check(inst, CVodeSetStopTime(cv->mem, t_end), "CVodeSetStopTime") != fmi2OK) {
+            inst->cvode_needs_reinit = 1;
+            return fmi2Error;
         }
     }
     return finish_step(inst, t_end, fmi2OK);

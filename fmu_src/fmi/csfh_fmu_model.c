@@ -80,6 +80,18 @@ static int outputs(void *mv, char *msg, size_t msg_size)
     return FMU_MODEL_OK;
 }
 
+static int cs_method(const void *mv)
+{
+    switch (((const csfh_model_t *)mv)->cs_method) {
+    case CSFH_CVODEMETHOD_BDF:
+        return FMU_CS_BDF;
+    case CSFH_CVODEMETHOD_ADAMS:
+        return FMU_CS_ADAMS;
+    default:
+        return FMU_CS_AUTO;
+    }
+}
+
 static void add_integrator_steps(void *mv, long steps)
 {
     csfh_model_t *m = (csfh_model_t *)mv;
@@ -106,4 +118,5 @@ const fmu_model_t fmu_model = {
     .event_update = event_update,
     .outputs = outputs,
     .add_integrator_steps = add_integrator_steps,
+    .cs_method = cs_method,
 };

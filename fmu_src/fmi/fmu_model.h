@@ -23,6 +23,11 @@
 #define FMU_MODEL_WARNING 1 /* computed, with a caveat (message); the glue logs it once */
 #define FMU_MODEL_NONFINITE (-1)
 
+/* Integration methods of the co-simulation interface (cosimulation.c). */
+#define FMU_CS_AUTO 0  /* Adams with fixed-point iteration, BDF while stiff */
+#define FMU_CS_BDF 1   /* BDF, Newton iteration, dense linear solver */
+#define FMU_CS_ADAMS 2 /* Adams-Moulton, fixed-point iteration */
+
 typedef struct {
     const char *guid;
     const char *model_identifier;
@@ -57,6 +62,8 @@ typedef struct {
     int (*outputs)(void *m, char *msg, size_t msg_size);
     /* Add co-simulation integrator steps to the model's counter (may be NULL). */
     void (*add_integrator_steps)(void *m, long steps);
+    /* The co-simulation method, FMU_CS_AUTO, FMU_CS_BDF or FMU_CS_ADAMS (NULL: BDF). */
+    int (*cs_method)(const void *m);
 } fmu_model_t;
 
 /* Defined by the model adapter linked into the FMU binary. */

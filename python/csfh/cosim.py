@@ -408,7 +408,7 @@ def _trajectory(
     model = f"cosim-{s.engine}" + ("" if s.engine == "libcosimpy" else f"-{s.ordering}")
     tr = Trajectory(model=model, scene=scene.name, table=table, contacts=onsets)
     tr.stats = {
-        "integrator": f"CVODE BDF inside the csfh FMU, rtol={s.tolerance or DEFAULT_TOLERANCE:g}"
+        "integrator": f"CVODE inside the csfh FMU, rtol={s.tolerance or DEFAULT_TOLERANCE:g}"
         f"; {s.engine} master, {s.ordering}, communication step {s.step:g} s",
         **stats,
     }

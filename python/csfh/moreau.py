@@ -143,8 +143,22 @@ def moreau(
             f"Moreau: non-finite state after {st['steps']} steps "
             f"(t = {st['steps'] * h:.6g} s); reduce h"
         )
-    rec = records[: st["records"]]
-    imp = impacts[: st["impacts"]]
+    tr = trajectory_from_buffers(scene.name, h, rule, records, impacts, st)
+    tr.stats.update({"wall_time": wall, "evaluations": model.counters()})
+    return tr
+
+
+def trajectory_from_buffers(
+    scene_name: str,
+    h: float,
+    rule: str,
+    records: np.ndarray,
+    impacts: np.ndarray,
+    stats: dict[str, int],
+) -> Trajectory:
+    """A Trajectory from the C stepper's record and impact buffers (single or batched run)."""
+    rec = records[: stats["records"]]
+    imp = impacts[: stats["impacts"]]
     table = {name: rec[:, i].copy() for i, name in enumerate(_RECORD)}
     impacts_d = {name: imp[:, i].copy() for i, name in enumerate(_IMPACT)}
     records_d = {  # rigid impacts: onset and release in one step, the impulse/h as "force"
@@ -157,21 +171,17 @@ def moreau(
     }
     tr = Trajectory(
         model="Moreau",
-        scene=scene.name,
+        scene=scene_name,
         table=table,
         contacts=imp[:, 0].copy(),
         impacts=impacts_d,
         contact_records=records_d,
     )
-    st.update(
-        {
-            "integrator": f"Moreau midpoint h={h:g} s, stick rule {rule}",
-            "rhs_evaluations": st["steps"],
-            "wall_time": wall,
-            "h": h,
-            "stick_rule": rule,
-            "evaluations": model.counters(),
-        }
-    )
-    tr.stats = st
+    tr.stats = {
+        **stats,
+        "integrator": f"Moreau midpoint h={h:g} s, stick rule {rule}",
+        "rhs_evaluations": stats["steps"],
+        "h": h,
+        "stick_rule": rule,
+    }
     return tr

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from .core import CoreModel, library
-from .moreau import _IMPACT, _RECORD, _STATS, STICK_RULES, core_model
+from .moreau import _IMPACT, _RECORD, _STATS, STICK_RULES, core_model, trajectory_from_buffers
 from .results import Trajectory
 from .scene import Scene
 
@@ -91,26 +91,11 @@ class BatchResult:
 
     def trajectory(self, i: int) -> Trajectory:
         """Variant i as the Trajectory csfh.moreau would have returned."""
-        rec = self.records[i, : self.n_records(i)]
-        imp = self.impacts[i, : self.n_impacts(i)]
-        tr = Trajectory(
-            model="Moreau",
-            scene=self.scene.name,
-            table={name: rec[:, k].copy() for k, name in enumerate(_RECORD)},
-            contacts=imp[:, 0].copy(),
-            impacts={name: imp[:, k].copy() for k, name in enumerate(_IMPACT)},
-        )
         st = {name: int(v) for name, v in zip(_STATS, self.stats[i], strict=True)}
-        st.update(
-            {
-                "integrator": f"Moreau midpoint h={self.h:g} s, stick rule {self.stick_rule} "
-                "(batched)",
-                "rhs_evaluations": st["steps"],
-                "h": self.h,
-                "stick_rule": self.stick_rule,
-            }
+        tr = trajectory_from_buffers(
+            self.scene.name, self.h, self.stick_rule, self.records[i], self.impacts[i], st
         )
-        tr.stats = st
+        tr.stats["integrator"] += " (batched)"
         return tr
 
 

@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 
 STYLE = {
     ("ME", "self"): {"color": "tab:blue", "marker": "o", "label": "ME, fmpy CVode (BDF)"},
-    ("CS", "self"): {"color": "tab:green", "marker": "s", "label": "CS, CVODE in the FMU"},
+    ("CS", "self"): {"color": "tab:green", "marker": "s", "label": "CS, CVODE in the FMU (auto)"},
     ("RK4", "self"): {"color": "tab:orange", "marker": "^", "label": "RK4 + bisection (paper)"},
     ("Moreau", "self"): {"color": "tab:red", "marker": "D", "label": "Moreau vs Moreau(h->0)"},
     ("Moreau", "LN_spheres"): {
@@ -30,7 +30,7 @@ STYLE = {
 
 
 def work_precision(study: Study, out: Path) -> list[Path]:
-    from .accuracy import METRIC_LABELS, METRICS
+    from .accuracy import METRIC_LABELS, METRICS, plotted
 
     files = []
     for model in dict.fromkeys(p.model for p in study.points):
@@ -44,7 +44,7 @@ def work_precision(study: Study, out: Path) -> list[Path]:
             )
             style = STYLE.get((integ, vs), {"label": f"{integ} vs {vs}"})
             for col, metric in enumerate(metrics):
-                good = [p for p in line if math.isfinite(p.errors[metric]) and p.errors[metric] > 0]
+                good = [p for p in line if plotted(p, metric)]
                 if not good:
                     continue
                 for row, cost in enumerate(("wall_time", "rhs_evaluations")):

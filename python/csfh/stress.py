@@ -10,9 +10,9 @@ Verdicts:
   than delta / v_T); the run may have stopped with a clear, specific error;
 * ``fail``: anything else — a bug to fix.
 
-Integrators: model exchange with fmpy's CVode (``ME``, rtol 1e-8), co-simulation with CVODE in
-the FMU (``CS``, rtol 1e-8), the paper's RK4 + bisection (``RK4``, h0 = 2e-4 s, 1e-4 m) and the
-Moreau stepper (h = 1e-5 s).
+Integrators: model exchange with fmpy's CVode (``ME``, rtol 1e-10), co-simulation with CVODE in
+the FMU (``CS``, rtol 1e-10, method auto), the paper's RK4 + bisection (``RK4``, h0 = 2e-4 s,
+1e-4 m) and the Moreau stepper (h = 1e-5 s).
 """
 
 from __future__ import annotations

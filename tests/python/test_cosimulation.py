@@ -2,7 +2,8 @@
 
 Accuracy against model exchange, contact onsets located inside communication steps (several per
 step), variable step sizes, rollback with fmi2Get/SetFMUstate in a master loop, a provoked CVODE
-failure, inputs held over the step, the default tolerance and the capability flags.
+failure, inputs held over the step, the default tolerance, the capability flags, and the three
+integration methods (solver.method: auto, BDF, Adams) with auto's switch to BDF when stiff.
 
 Tolerances: "tight" is a relative tolerance of 1e-10 for both CVODEs (the FMU's, set with
 fmi2SetupExperiment; fmpy's in model exchange). CS onset times are read from the FMU's logEvents
@@ -15,6 +16,7 @@ import math
 import re
 from collections.abc import Callable
 from ctypes import byref, c_double
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +38,9 @@ G = 9.81
 T_FIRST_CENTRAL = math.sqrt(2 * 0.03 / G)  # PHYSICS.md 7.1
 V_FIRST_CENTRAL = math.sqrt(2 * G * 0.03)
 RHO_MAX_CENTRAL = 1.19279e-4  # PHYSICS.md 7.2, K_spheres, m: the indentation scale
+R1 = 0.18  # m, contact.R1 of the paper's scenes (Table 2)
+METHODS = {"auto": 1, "BDF": 2, "Adams": 3}  # enumeration CvodeMethod
+TRIAL = "auto: trying BDF"  # auto's logEvents line when Adams struggles
 
 
 # ------------------------------------------------------------------------------------------
@@ -65,8 +70,10 @@ def cs_instance(
     tolerance: float | None = TIGHT,
     law: str = "LN_spheres",
     extra: dict[str, float] | None = None,
+    method: str | None = None,
 ) -> tuple[FMU2Slave, Any]:
-    """An initialized co-simulation instance that logs its events."""
+    """An initialized co-simulation instance that logs its events (method: solver.method by
+    name; None keeps the start value, auto)."""
     fmu, log = make_fmu("CS")
     fmu.setDebugLogging(True, ["logEvents"])
     fmu.setupExperiment(tolerance=tolerance, startTime=0.0)
@@ -75,6 +82,9 @@ def cs_instance(
     if extra:
         refs = {v.name: v.valueReference for v in md.modelVariables}
         fmu.setReal([refs[k] for k in extra], list(extra.values()))
+    if method is not None:
+        refs = {v.name: v.valueReference for v in md.modelVariables}
+        fmu.setInteger([refs["solver.method"]], [METHODS[method]])
     fmu.exitInitializationMode()
     return fmu, log
 
@@ -127,16 +137,22 @@ def me_onsets(
 # accuracy against model exchange
 
 
+_ME_ONSETS: dict[str, np.ndarray] = {}
+
+
+@pytest.mark.parametrize("method", list(METHODS))
 @pytest.mark.parametrize("name", ["central", "asymmetric", "csfh"])
 def test_cs_matches_me_contact_times(
-    make_fmu: MakeFmu, model_description: ModelDescription, fmu_path: Path, name: str
+    make_fmu: MakeFmu, model_description: ModelDescription, fmu_path: Path, name: str, method: str
 ) -> None:
-    """CS (FMU's CVODE) and ME (fmpy's CVode), both at rtol 1e-10, 1 s: the contact sequences
-    agree up to the first contact whose time differs by 1 % (impacts make the motion chaotic),
-    and the first three contact times agree within 1e-6 s."""
+    """CS (FMU's CVODE, each method) and ME (fmpy's CVode), both at rtol 1e-10, 1 s: the
+    contact sequences agree up to the first contact whose time differs by 1 % (impacts make the
+    motion chaotic), and the first three contact times agree within 1e-6 s."""
     scene = load_scene(name)
-    me = me_onsets(fmu_path, scene, 1.0)
-    fmu, log = cs_instance(make_fmu, model_description, scene)
+    if name not in _ME_ONSETS:
+        _ME_ONSETS[name] = me_onsets(fmu_path, scene, 1.0)
+    me = _ME_ONSETS[name]
+    fmu, log = cs_instance(make_fmu, model_description, scene, method=method)
     run(fmu, grid(1e-3, 1.0))
     cs = onsets(log)
     assert len(me) >= 3 and len(cs) >= 3
@@ -195,15 +211,23 @@ def test_many_contacts_in_one_communication_step(
 # communication steps, rollback
 
 
+@pytest.mark.parametrize(("method", "atol"), [("BDF", 1e-8), ("auto", 1e-7)])
 def test_variable_step_sizes_give_the_fixed_step_trajectory(
-    make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int]
+    make_fmu: MakeFmu,
+    model_description: ModelDescription,
+    vr: dict[str, int],
+    method: str,
+    atol: float,
 ) -> None:
     """Random step sizes (1e-4 s to 0.1 s) against fixed 1e-3 s steps on the csfh scene: the
-    same contacts and, at every 0.1 s, the same state within 1e-8 m (rtol 1e-10; only CVODE's
-    path differs, it stops at other communication points)."""
+    same contacts within atol s and, at every 0.1 s, the same position within atol m (x, y and
+    R1 theta) and velocity within 100 atol m/s (rtol 1e-10; only CVODE's path differs, it stops
+    at other communication points). atol is the error of the method at this tolerance: against
+    model exchange at rtol 1e-13 the first six onsets are within 6e-9 s with BDF, 8e-8 s with
+    Adams (auto), whose error estimate is less sharp through the contact's non-smooth onset."""
     scene = load_scene("csfh")
     blocks = [0.1 * k for k in range(1, 6)]
-    fixed, fixed_log = cs_instance(make_fmu, model_description, scene)
+    fixed, fixed_log = cs_instance(make_fmu, model_description, scene, method=method)
     reference = []
     t = 0.0
     for _ in blocks:
@@ -211,7 +235,7 @@ def test_variable_step_sizes_give_the_fixed_step_trajectory(
         reference.append(states(fixed, vr))
     fixed_onsets = onsets(fixed_log)
     rng = np.random.default_rng(7)
-    variable, variable_log = cs_instance(make_fmu, model_description, scene)
+    variable, variable_log = cs_instance(make_fmu, model_description, scene, method=method)
     t, sizes = 0.0, []
     for end, a in zip(blocks, reference, strict=True):
         cuts = np.sort(rng.uniform(end - 0.1, end, size=rng.integers(2, 30)))
@@ -219,11 +243,12 @@ def test_variable_step_sizes_give_the_fixed_step_trajectory(
         sizes += list(np.diff([t, *points]))
         t = run(variable, points, t)
         b = states(variable, vr)
-        np.testing.assert_allclose(b[:3], a[:3], rtol=0, atol=1e-8)
-        np.testing.assert_allclose(b[3:], a[3:], rtol=0, atol=1e-6)
+        scale = np.array([1.0, 1.0, R1])
+        np.testing.assert_allclose(b[:3] * scale, a[:3] * scale, rtol=0, atol=atol)
+        np.testing.assert_allclose(b[3:] * scale, a[3:] * scale, rtol=0, atol=100 * atol)
     assert min(sizes) < 1e-3 < max(sizes)
     assert len(fixed_onsets) >= 5
-    np.testing.assert_allclose(onsets(variable_log), fixed_onsets, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(onsets(variable_log), fixed_onsets, rtol=0, atol=atol)
 
 
 def test_rollback_in_a_master_loop(
@@ -405,3 +430,61 @@ def test_capability_flags_say_what_is_supported(
             call()
         assert info.value.status == ERROR, name
         assert name in log.errors()[-1], (name, log.errors())
+
+
+# ------------------------------------------------------------------------------------------
+# integration methods
+
+
+def steps_and_log(
+    make_fmu: MakeFmu, md: ModelDescription, scene: Scene, method: str, t_end: float
+) -> tuple[int, np.ndarray, str, float]:
+    """CVODE steps (diagnostics.integrator_steps), final state, log and final indentation
+    divided by the static one (m g / K_spheres)^(2/3) of a run at rtol 1e-6 with 1e-2 s
+    communication steps."""
+    refs = {v.name: v.valueReference for v in md.modelVariables}
+    fmu, log = cs_instance(make_fmu, md, scene, tolerance=1e-6, method=method)
+    run(fmu, grid(1e-2, t_end))
+    steps = fmu.getInteger([refs["diagnostics.integrator_steps"]])[0]
+    m, K, ind = fmu.getReal(
+        [refs[n] for n in ("body1.m", "contact.K_spheres", "contact.indentation")]
+    )
+    return steps, states(fmu, refs), log.text(), ind / (m * G / K) ** (2 / 3)
+
+
+def test_auto_stays_with_adams_while_not_stiff(
+    make_fmu: MakeFmu, model_description: ModelDescription
+) -> None:
+    """The csfh scene's first second (flight, impacts, flexure) is not stiff at the steps its
+    accuracy needs: auto never keeps BDF and is exactly Adams, which takes fewer steps than BDF
+    (higher order, no Jacobian)."""
+    scene = load_scene("csfh")
+    auto = steps_and_log(make_fmu, model_description, scene, "auto", 1.0)
+    adams = steps_and_log(make_fmu, model_description, scene, "Adams", 1.0)
+    bdf = steps_and_log(make_fmu, model_description, scene, "BDF", 1.0)
+    assert TRIAL not in auto[2]
+    assert auto[0] == adams[0]
+    np.testing.assert_array_equal(auto[1], adams[1])
+    assert auto[0] < 0.85 * bdf[0], (auto[0], bdf[0])
+
+
+def test_auto_switches_to_bdf_in_resting_contact(
+    make_fmu: MakeFmu, model_description: ModelDescription
+) -> None:
+    """Central drop with c_r = 0.9, no flexure, no friction (the stress suite's resting case):
+    after about 1.5 s the body rests on the contact spring, which is stiff (its period is far
+    below the time scale of the motion). Adams alone is held to steps of that period; auto tries
+    BDF (logged), whose steps are far longer, and needs at most half of Adams' steps and no more
+    than BDF's; all three end at rest at the static indentation (m g / K)^(2/3)
+    (PHYSICS.md 7.2)."""
+    scene = replace(
+        load_scene("central").with_parameters(**{"contact.cr": 0.9}), flexure=False, friction=False
+    )
+    runs = {m: steps_and_log(make_fmu, model_description, scene, m, 4.0) for m in METHODS}
+    assert TRIAL in runs["auto"][2]
+    assert TRIAL not in runs["Adams"][2] and TRIAL not in runs["BDF"][2]
+    steps = {m: r[0] for m, r in runs.items()}
+    assert steps["auto"] < 0.5 * steps["Adams"] and steps["auto"] <= steps["BDF"], steps
+    for method, (_, x, _, static_ratio) in runs.items():
+        assert np.all(np.abs(x[3:]) < 1e-4), (method, x)
+        assert static_ratio == pytest.approx(1.0, abs=1e-3), method
