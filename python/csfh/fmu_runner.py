@@ -242,10 +242,10 @@ def simulate_me(
 
         def refine_peaks(rec: list[float], ta: float, tb: float, at_a: tuple[float, float]) -> None:
             """Largest F_N and indentation over the step [ta, tb] on CVODE's interpolant: the
-            step is cut into eight parts; in every part where the time derivative (a centred
-            difference of the interpolant, one-sided at the step ends) changes sign from + to -,
-            its root is found by bisection and the value there counts (a contact step can hold
-            more than one hump, e.g. in stick-slip)."""
+            step is cut into eight parts; the values at their ends count, and in every part where
+            the time derivative (a centred difference of the interpolant, one-sided at the step
+            ends) changes sign from + to - (or to 0), its root is found by bisection and the value
+            there counts (a contact step can hold more than one hump, e.g. in stick-slip)."""
             if not tb - ta > 1e-13 * max(1.0, abs(tb)):
                 return
             eps = 1e-7 * (tb - ta)
@@ -258,12 +258,13 @@ def simulate_me(
                 return (interpolated(hi, peak_vrs)[j] - interpolated(lo, peak_vrs)[j]) / (hi - lo)
 
             ts = [ta + (tb - ta) * k / 8 for k in range(9)]
-            ends = interpolated(tb, peak_vrs)
+            samples = [interpolated(tk, peak_vrs) for tk in ts]
             for col, j in ((4, 0), (5, 1)):
-                peak = max(at_a[j], ends[j])
+                peak = max(at_a[j], *(v[j] for v in samples))
                 slopes = [slope(tk, j) for tk in ts]
                 for k in range(8):
-                    if not slopes[k] > 0 > slopes[k + 1]:
+                    # a zero difference (the hump right at a sample) ends the part before it
+                    if not (slopes[k] > 0 and slopes[k + 1] <= 0):
                         continue
                     lo, hi = ts[k], ts[k + 1]
                     while hi - lo > 1e-14 * max(1.0, abs(hi)):

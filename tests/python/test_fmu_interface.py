@@ -444,6 +444,8 @@ BAD_INPUTS: list[tuple[list[tuple[str, float]], tuple[str, float]]] = [
     ([("contact.K_spheres_given", -1.0)], ("contact.K_spheres_given", -1.0)),
     ([("contact.law", 0)], ("contact.law", 0)),
     ([("contact.law", 7)], ("contact.law", 7)),
+    ([("solver.method", 0)], ("solver.method", 0)),
+    ([("solver.method", 4)], ("solver.method", 4)),
     ([("contact.law", -1)], ("contact.law", -1)),
     ([("contact.esdu_reading", 0)], ("contact.esdu_reading", 0)),
     ([("contact.esdu_reading", 3)], ("contact.esdu_reading", 3)),
