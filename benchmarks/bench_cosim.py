@@ -12,9 +12,12 @@ B. The simulation loop alone, after initialization (what differs between the int
    model-exchange instance from grid point to grid point with event iteration (the loop of
    fmpy.simulate_fmu), against fmi2DoStep from grid point to grid point, with each of the FMU's
    co-simulation methods (solver.method: auto, the default; BDF, as fmpy's CVode; Adams). Both
-   read the six states at every grid point. Beside the times, the error of the first three
-   contact times against model exchange at rtol 1e-12 (same tolerance need not mean same error:
-   Adams' error estimate is less sharp through the contact's non-smooth onset).
+   read the six states at every grid point, with the same direct fmi2GetReal call
+   (csfh.direct_calls); fmi2DoStep is called directly too, as a C master or csfh.simulate_cs
+   does. The column "auto, fmpy calls" is the same CS loop through fmpy's FMU2Slave methods,
+   whose Python cost per call (~6-9 us) dominates on a fine grid. Beside the times, the error of
+   the first three contact times against model exchange at rtol 1e-12 (same tolerance need not
+   mean same error).
 
 Run: python benchmarks/bench_cosim.py [--repeats 5] [--rtol 1e-6 1e-8] [--grid 1e-2 1e-3 1e-4]
 """
@@ -31,6 +34,7 @@ import fmpy
 import numpy as np
 
 from csfh import load_scene, model_info
+from csfh.direct_calls import DirectCalls
 from csfh.fmu_runner import STATE_NAMES, simulate_cs, simulate_me
 from csfh.scene import Scene
 
@@ -119,6 +123,7 @@ class Loops:
             maxNumSteps=100000,
         )
         n = round(self.scene.stop_time / dt)
+        read_states = DirectCalls(me).real_reader(self.refs)
         t0 = time.perf_counter()
         t, k = 0.0, 1
         while k <= n:
@@ -132,7 +137,7 @@ class Loops:
                 me.enterContinuousTimeMode()
                 solver.reset(t)
             if t >= t_next * (1 - 1e-12):
-                me.getReal(self.refs)
+                read_states()
                 k += 1
         wall = time.perf_counter() - t0
         contacts = me.getInteger([self.count])[0]
@@ -140,15 +145,24 @@ class Loops:
         me.terminate()
         return wall, contacts
 
-    def run_cs(self, rtol: float, dt: float, method: int = 1) -> tuple[float, int]:
+    def run_cs(
+        self, rtol: float, dt: float, method: int = 1, wrappers: bool = False
+    ) -> tuple[float, int]:
         cs = self.cs
         cs.reset()
         _setup(cs, self.scene, rtol, {"solver.method": method})
         n = round(self.scene.stop_time / dt)
+        direct = DirectCalls(cs)
+        do_step, read_states = direct.do_step, direct.real_reader(self.refs)
         t0 = time.perf_counter()
-        for k in range(n):
-            cs.doStep(k * dt, dt)
-            cs.getReal(self.refs)
+        if wrappers:  # fmpy's FMU2Slave methods
+            for k in range(n):
+                cs.doStep(k * dt, dt)
+                cs.getReal(self.refs)
+        else:
+            for k in range(n):
+                do_step(k * dt, dt)
+                read_states()
         wall = time.perf_counter() - t0
         contacts = cs.getInteger([self.count])[0]
         cs.terminate()
@@ -212,7 +226,7 @@ def main() -> None:
     print(
         f"  {'rtol':>6} {'grid [s]':>8} | {'ME (fmpy CVode)':>24} | "
         + " | ".join(f"{'CS ' + m:>24} {'ratio':>6}" for m in METHODS)
-        + " | contacts | target >= 10x (auto)"
+        + f" | {'auto, fmpy calls':>17} | contacts | target >= 10x (auto)"
     )
     reference = simulate_me(scene, LAW, rtol=1e-12).contact_records["t_onset"][:3]
 
@@ -224,7 +238,7 @@ def main() -> None:
     try:
         for rtol in args.rtol:
             for dt in args.grid:
-                walls: dict[str, list[float]] = {"me": [], **{m: [] for m in METHODS}}
+                walls: dict[str, list[float]] = {"me": [], "fmpy": [], **{m: [] for m in METHODS}}
                 contacts = {}
                 for _ in range(args.repeats):
                     wall, contacts["me"] = loops.run_me(rtol, dt)
@@ -232,6 +246,8 @@ def main() -> None:
                     for m, value in METHODS.items():
                         wall, contacts[m] = loops.run_cs(rtol, dt, value)
                         walls[m].append(wall)
+                    wall, contacts["fmpy"] = loops.run_cs(rtol, dt, METHODS["auto"], wrappers=True)
+                    walls["fmpy"].append(wall)
                 t = {k: float(np.median(v)) for k, v in walls.items()}
                 err = {"me": error(simulate_me(scene, LAW, rtol=rtol, output_interval=dt))}
                 for m, value in METHODS.items():
@@ -247,10 +263,11 @@ def main() -> None:
                     f"{1e3 * t[m]:8.1f} ms [{err[m]:8.1e}] {t['me'] / t[m]:5.1f}x" for m in METHODS
                 )
                 ratio = t["me"] / t["auto"]
-                counts = "/".join(str(contacts[k]) for k in ("me", *METHODS))
+                counts = "/".join(str(contacts[k]) for k in ("me", *METHODS, "fmpy"))
                 print(
                     f"  {rtol:6.0e} {dt:8.0e} | {1e3 * t['me']:8.1f} ms [{err['me']:8.1e}]     | "
-                    f"{cells} | {counts} | {'met' if ratio >= 10 else 'NOT met'}"
+                    f"{cells} | {1e3 * t['fmpy']:8.1f} ms {t['me'] / t['fmpy']:5.1f}x | {counts} | "
+                    f"{'met' if ratio >= 10 else 'NOT met'}"
                 )
     finally:
         loops.free()

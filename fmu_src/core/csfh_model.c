@@ -170,6 +170,15 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
         return;
     }
     csfh_count(&m->counters.contact);
+    /* The contact force acts in the contact mode only, the mode the event update sets where the
+     * gap crosses 0 (the relation gap < 0 is frozen between events, as FMI and Modelica do).
+     * A state inside the gap that the integrator probes before it has located the onset thus
+     * sees the smooth flight forces, and the onset (time, rate) lies on the smooth flight
+     * solution: a step that reaches past the onset does not smear the stiff contact force
+     * into the interpolant the root finder uses. (contact_by_gap: the paper's RK4 scheme.) */
+    if (!m->z.in_contact && !m->contact_by_gap) {
+        return;
+    }
     const double gap = csfh_contact_gap(m->d.delta, m->p.s1bar, q);
     if (!(gap < 0.0)) {
         return;
@@ -178,8 +187,8 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
     csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, q, &c->kin);
     c->rho = -c->kin.gap;
     c->rho_dot = -(c->kin.DN[0] * u[0] + c->kin.DN[1] * u[1] + c->kin.DN[2] * u[2]);
-    /* the onset rate captured at the event; a state inside the gap that the integrator probes
-     * before the event is located uses its own rate (continuous at the event) */
+    /* the onset rate captured at the event (PHYSICS.md 5.2); before the event (contact_by_gap)
+     * the state's own rate, continuous at the event */
     const double onset = m->z.in_contact ? m->z.onset_speed : c->rho_dot;
     c->status = csfh_normal_force(&m->d.normal, c->rho, c->rho_dot, onset, &c->F_N);
     if (m->p.friction_enabled && c->F_N > 0.0) {

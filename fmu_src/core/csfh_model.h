@@ -80,6 +80,9 @@ typedef struct {
     csfh_outputs_t out;
     csfh_counters_t counters;
     int cs_method;      /* solver.method (CvodeMethod): read by the co-simulation glue only */
+    int contact_by_gap; /* 1: the contact force acts wherever the gap is negative, also before
+                         * the onset event (the paper's RK4 scheme, which has no root finding
+                         * and bisects the step instead); 0 (default): in the contact mode only */
 } csfh_model_t;
 
 /* Contact force evaluation at one state (for outputs and the Moreau harness). */
@@ -118,7 +121,8 @@ void csfh_model_init_discrete(csfh_model_t *m);
 /* Smooth generalized forces at q: gravity + inputs + flexure (if enabled). */
 void csfh_model_smooth_forces(csfh_model_t *m, const double q[3], double Q[3]);
 
-/* Compliant contact force at (q, u) with the current discrete state. */
+/* Compliant contact force at (q, u) with the current discrete state: zero outside the contact
+ * mode (set by csfh_model_event_update), whatever the gap. */
 void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
                         csfh_contact_eval_t *c);
 

@@ -58,6 +58,8 @@ int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
     memcpy(x, x0, sizeof(x));
     memcpy(m->x, x0, sizeof(x));
     m->time = t0;
+    const int contact_by_gap = m->contact_by_gap;
+    m->contact_by_gap = 1; /* the paper's scheme: the force acts as soon as the gap is negative */
     csfh_model_init_discrete(m);
     double *current = NULL; /* the contact record being filled */
     if (m->z.in_contact && contacts != NULL && max_contacts > 0) {
@@ -136,5 +138,6 @@ int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
     }
     memcpy(x_end, x, sizeof(x));
     stats->rhs = m->counters.rhs - rhs_before;
+    m->contact_by_gap = contact_by_gap;
     return status;
 }

@@ -2,7 +2,10 @@
  * inside the step by root finding on the model-exchange event indicators (csfh: the gap, so
  * every contact onset and release). At each root the discrete state is updated (csfh: the onset
  * indentation rate is captured) and CVODE is re-initialised; the step then continues to its end,
- * however many events it holds.
+ * however many events it holds. The communication points do not cut CVODE's steps short: CVODE
+ * may step past the end of a communication step, the FMU's state there is CVODE's interpolant
+ * (to the same tolerance), and the next fmi2DoStep goes on from CVODE's internal state, so a
+ * fine communication grid costs no extra integration steps.
  *
  * Method (fmu_model.cs_method; csfh: parameter solver.method):
  *   BDF    BDF with Newton iteration, dense direct linear solver, difference-quotient Jacobian;
@@ -50,6 +53,7 @@
 #define AUTO_SUSPECT_FAILED 0.05      /* auto: failed fraction of an Adams window that triggers a trial */
 #define AUTO_BDF_COST 1.5             /* auto: cost of a BDF step over an Adams step */
 #define AUTO_MAX_HOLDOFF 64           /* auto: most windows between two trials */
+#define FIRST_STEP_HORIZON 1.0        /* s: the tout of CVODE's first-step estimate (see cs_do_step) */
 
 struct csfh_cvode {
     SUNContext ctx;
@@ -68,6 +72,9 @@ struct csfh_cvode {
     int next_holdoff;
     double adams_h;         /* auto: mean Adams step of the window before the trial, s */
     double tolerance; /* the relative tolerance the solver was set up with */
+    N_Vector y_root;  /* a root CVODE reported beyond the end of the last communication step: */
+    double t_root;    /* the state there and its time, */
+    int root_pending; /* handled in the communication step that contains it */
     long counted_steps; /* CVODE steps already added to the model's counter */
 };
 
@@ -122,6 +129,9 @@ void cs_free(fmu_instance_t *inst)
     }
     if (cv->abstol != NULL) {
         N_VDestroy(cv->abstol);
+    }
+    if (cv->y_root != NULL) {
+        N_VDestroy(cv->y_root);
     }
     if (cv->ctx != NULL) {
         SUNContext_Free(&cv->ctx);
@@ -187,6 +197,7 @@ static fmi2Status cv_create(fmu_instance_t *inst, int method)
     }
     cv->method = method;
     cv->counted_steps = 0;
+    cv->root_pending = 0;
     start_window(cv, *fmu_time(inst));
     fmi2Status s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
     if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, *fmu_time(inst), cv->y), "CVodeInit");
@@ -215,6 +226,7 @@ static fmi2Status cs_start(fmu_instance_t *inst)
     if (cv != NULL && cv->mem != NULL && cv->method == method) {
         memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
         cv->counted_steps = 0;
+        cv->root_pending = 0;
         start_segment(cv, *fmu_time(inst));
         return cv_check(inst, CVodeReInit(cv->mem, *fmu_time(inst), cv->y), "CVodeReInit");
     }
@@ -233,7 +245,8 @@ static fmi2Status cs_start(fmu_instance_t *inst)
         }
         cv->y = N_VNew_Serial(NX, cv->ctx);
         cv->abstol = N_VNew_Serial(NX, cv->ctx);
-        if (cv->y == NULL || cv->abstol == NULL) {
+        cv->y_root = N_VNew_Serial(NX, cv->ctx);
+        if (cv->y == NULL || cv->abstol == NULL || cv->y_root == NULL) {
             fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate CVODE");
             cs_free(inst);
             return fmi2Error;
@@ -362,16 +375,43 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
         inst->cvode_needs_reinit = 0;
     }
     csfh_cvode_t *cv = inst->cvode;
-    if (cv_check(inst, CVodeSetStopTime(cv->mem, t_end), "CVodeSetStopTime") != fmi2OK) {
-        return fmi2Error;
-    }
     const int automatic = configured_method(inst) == FMU_CS_AUTO;
     long events = 0, steps = 0;
     double tret = now;
     while (tret < t_end) {
-        /* one internal step per call: the solution is taken at every step, and auto can check
-         * the stiffness without waiting for the end of the communication step */
-        const int flag = CVode(cv->mem, t_end, cv->y, &tret, CV_ONE_STEP);
+        /* One internal step per call: the solution is taken at every step, and auto can check
+         * the stiffness without waiting for the end of the communication step. No stop time:
+         * the communication points do not cut CVODE's steps short. A step that ends beyond
+         * t_end is not repeated: the state at t_end comes from CVODE's interpolant (for this
+         * and for later communication points the step covers), and a root CVODE reports beyond
+         * t_end is kept pending until the communication step that contains it. */
+        int flag;
+        double tn = tret;
+        CVodeGetCurrentTime(cv->mem, &tn);
+        if (cv->root_pending && cv->t_root <= t_end) {
+            memcpy(N_VGetArrayPointer(cv->y), N_VGetArrayPointer(cv->y_root), NX * sizeof(double));
+            tret = cv->t_root;
+            cv->root_pending = 0;
+            flag = CV_ROOT_RETURN;
+        } else if (cv->root_pending || tn >= t_end) {
+            /* CVODE's last step (and the root check) already reaches past t_end */
+            flag = CVodeGetDky(cv->mem, t_end, 0, cv->y);
+            tret = t_end;
+        } else {
+            /* tout only sets the size of the first step after a (re)start (CVODE's estimate is
+             * bounded by a tenth of the distance to tout): a fixed horizon, so that the step
+             * sequence does not depend on the communication grid */
+            flag = CVode(cv->mem, tret + FIRST_STEP_HORIZON, cv->y, &tret, CV_ONE_STEP);
+            if (flag >= 0 && tret > t_end) {
+                if (flag == CV_ROOT_RETURN) {
+                    memcpy(N_VGetArrayPointer(cv->y_root), N_VGetArrayPointer(cv->y), NX * sizeof(double));
+                    cv->t_root = tret;
+                    cv->root_pending = 1;
+                }
+                flag = CVodeGetDky(cv->mem, t_end, 0, cv->y);
+                tret = t_end;
+            }
+        }
         steps += count_steps(inst);
         if (flag < 0) {
             /* CVODE's message is already in the log (error_handler); add the flag. CVODE returns
@@ -394,7 +434,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             return fmi2Error;
         }
         take_solution(inst, tret);
-        if (flag == CV_TSTOP_RETURN) {
+        if (flag != CV_ROOT_RETURN && tret >= t_end) {
             break;
         }
         if (steps > MAX_STEPS_PER_CALL) {
@@ -424,6 +464,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             start_segment(cv, tret);
         } else if (restart) {
             cv->counted_steps = 0;
+            cv->root_pending = 0;
             start_segment(cv, tret);
             s = cv_check(inst, CVodeReInit(cv->mem, tret, cv->y), "CVodeReInit");
         } else if (automatic) {
@@ -439,8 +480,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
         } else {
             continue;
         }
-        if (s != fmi2OK ||
-            cv_check(inst, CVodeSetStopTime(cv->mem, t_end), "CVodeSetStopTime") != fmi2OK) {
+        if (s != fmi2OK) {
             inst->cvode_needs_reinit = 1;
             return fmi2Error;
         }

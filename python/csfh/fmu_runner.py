@@ -25,6 +25,7 @@ from fmpy.model_description import ModelDescription
 
 from . import model_info
 from ._paths import fmu_path
+from .direct_calls import DirectCalls
 from .progress import Progress
 from .results import CONTACT_FIELDS, Trajectory
 from .scene import Scene
@@ -417,20 +418,25 @@ def simulate_cs(
             )
         t = 0.0
         do_step_time = 0.0
+        # the loop calls the FMU directly (fmpy's wrappers would cost more than the FMU's own
+        # work on a fine communication grid)
+        direct = DirectCalls(fmu)
+        read_reals = direct.real_reader([*out_vrs, *event_vrs])
+        read_count = direct.integer_reader([count_vr])
+        read_active = direct.boolean_reader([active_vr])
+        n_out = len(out_vrs)
         for k in range(n):
             t_next = min((k + 1) * h, t_end)
             t0 = time.perf_counter()
-            fmu.doStep(currentCommunicationPoint=t, communicationStepSize=t_next - t)
+            direct.do_step(t, t_next - t)
             do_step_time += time.perf_counter() - t0
             t = t_next
-            table.add([t, *fmu.getReal(out_vrs)])
+            values = read_reals()
+            table.add([t, *values[:n_out]])
             # the FMU reports the located event times of the last onset and release; contacts
             # that begin and end inside one communication step show only their last values
-            new_count, new_active = (
-                fmu.getInteger([count_vr])[0],
-                bool(fmu.getBoolean([active_vr])[0]),
-            )
-            t_on, v_on, t_off, v_off = fmu.getReal(event_vrs)
+            new_count, new_active = read_count()[0], bool(read_active()[0])
+            t_on, v_on, t_off, v_off = values[n_out:]
             if new_count > count:
                 records.append([t_on, v_on, math.nan, math.nan, math.nan, math.nan])
             if records and not new_active and (new_count > count or active):

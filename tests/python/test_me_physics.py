@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from ctypes import POINTER, c_double
 from pathlib import Path
 
 import fmpy
@@ -129,3 +130,34 @@ def test_switched_off_parts_are_not_evaluated(fmu_path: Path, model_description)
     assert on["diagnostics.flexure_evaluations"][-1] > 0
     assert on["diagnostics.friction_evaluations"][-1] > 0
     assert on["diagnostics.contact_evaluations"][-1] > 0
+
+
+def test_contact_force_acts_in_the_contact_mode_only(make_fmu, vr: dict[str, int]) -> None:
+    """A penetrating state that the integrator probes before the onset event is located sees
+    the flight forces (the relation gap < 0 is frozen between events, as in FMI/Modelica), so
+    the located onset lies on the smooth flight solution; after the event the force acts."""
+    fmu, _ = make_fmu("ME")
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setBoolean([vr["flexure.enabled"], vr["friction.enabled"]], [False, False])
+    fmu.setReal([vr["body1.x"], vr["body1.y"]], [0.0, 0.01])
+    fmu.exitInitializationMode()
+    fmu.newDiscreteStates()
+    fmu.enterContinuousTimeMode()
+    penetration = 1e-5  # m
+    x = np.array([0.0, -DELTA - penetration, 0.0, 0.0, -0.77, 0.0])
+    fmu.setContinuousStates(x.ctypes.data_as(POINTER(c_double)), 6)
+    z = np.zeros(1)
+    fmu.getEventIndicators(z.ctypes.data_as(POINTER(c_double)), 1)
+    assert z[0] == pytest.approx(-penetration, rel=1e-6)  # the importer sees the crossing
+    dx = np.zeros(6)
+    fmu.getDerivatives(dx.ctypes.data_as(POINTER(c_double)), 6)
+    assert dx[4] == -G  # flight: gravity only
+    assert fmu.getReal([vr["contact.F_N"]])[0] == 0.0
+    fmu.enterEventMode()
+    fmu.newDiscreteStates()
+    fmu.enterContinuousTimeMode()
+    fmu.getDerivatives(dx.ctypes.data_as(POINTER(c_double)), 6)
+    F_N = fmu.getReal([vr["contact.F_N"]])[0]
+    assert F_N > 100.0  # Hertz at 10 um: K 1e10 N/m^1.5 x (1e-5 m)^1.5 ~ 3e2 N
+    assert dx[4] > 0.0
