@@ -13,21 +13,29 @@ B. The simulation loop alone, after initialization (what differs between the int
    fmpy.simulate_fmu), against fmi2DoStep from grid point to grid point, with each of the FMU's
    co-simulation methods (solver.method: auto, the default; BDF, as fmpy's CVode; Adams). Both
    read the six states at every grid point, with the same direct fmi2GetReal call
-   (csfh.direct_calls); fmi2DoStep is called directly too, as a C master or csfh.simulate_cs
+   (csfh.direct_calls, ~1 us per call); fmi2DoStep is called directly too, as csfh.simulate_cs
    does. The column "auto, fmpy calls" is the same CS loop through fmpy's FMU2Slave methods,
-   whose Python cost per call (~6-9 us) dominates on a fine grid. Beside the times, the error of
-   the first three contact times against model exchange at rtol 1e-12 (same tolerance need not
-   mean same error).
+   whose Python cost per call (~6-9 us) dominates on a fine grid; the column "auto, C master" is
+   the same loop in a compiled master (benchmarks/master/bench_cs_master.c, built as
+   build/bench_cs_master), as a C/C++ importer runs the FMU: no Python per communication point.
+   Beside the times, the error of the first three contact times against model exchange at rtol
+   1e-12 (same tolerance need not mean same error).
 
 Run: python benchmarks/bench_cosim.py [--repeats 5] [--rtol 1e-6 1e-8] [--grid 1e-2 1e-3 1e-4]
+     [--master build/bench_cs_master]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import math
+import os
 import statistics
+import subprocess
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import fmpy
@@ -85,6 +93,8 @@ class Loops:
 
         md = model_info.model_description()
         directory = fmpy.extract(str(fmu_path()))
+        self.binary = str(Path(directory) / "binaries" / "linux64" / "csfh.so")
+        self.guid = md.guid
         self.scene = scene
         self.refs = [model_info.variables()[n].valueReference for n in STATE_NAMES]
         self.count = model_info.variables()["contact.count"].valueReference
@@ -168,6 +178,33 @@ class Loops:
         cs.terminate()
         return wall, contacts
 
+    def run_c_master(self, master: Path, rtol: float, dt: float, repeats: int) -> tuple[float, int]:
+        """The same CS loop (method auto) from the compiled master: median loop time."""
+        variables = model_info.variables()
+        starts = []
+        for name, value in {**start_values(self.scene), "solver.method": METHODS["auto"]}.items():
+            kind = {"Real": "r", "Boolean": "b"}.get(variables[name].type, "i")
+            starts.append(f"{variables[name].valueReference}:{kind}={float(value)!r}")
+        out = subprocess.run(
+            [
+                str(master),
+                self.binary,
+                self.guid,
+                repr(rtol),
+                repr(dt),
+                repr(self.scene.stop_time),
+                str(repeats),
+                ",".join(map(str, self.refs)),
+                str(self.count),
+                *starts,
+            ],
+            check=True,
+            capture_output=True,
+            text=True,
+        )
+        result = json.loads(out.stdout)
+        return float(result["loop_seconds"]), int(result["count"][0])
+
     def free(self) -> None:
         self.me.freeInstance()
         self.cs.freeInstance()
@@ -178,7 +215,15 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--rtol", type=float, nargs="+", default=[1e-6, 1e-8])
     ap.add_argument("--grid", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4])
+    default_master = Path(__file__).parents[1] / "build" / "bench_cs_master"
+    ap.add_argument(
+        "--master",
+        type=Path,
+        default=Path(os.environ.get("CSFH_CS_MASTER", default_master)),
+        help="the compiled master (cmake --build build builds build/bench_cs_master)",
+    )
     args = ap.parse_args()
+    master = args.master if args.master.is_file() else None
     scene = load_scene("csfh")
     path = str(__import__("csfh").fmu_path())
     print(
@@ -226,7 +271,7 @@ def main() -> None:
     print(
         f"  {'rtol':>6} {'grid [s]':>8} | {'ME (fmpy CVode)':>24} | "
         + " | ".join(f"{'CS ' + m:>24} {'ratio':>6}" for m in METHODS)
-        + f" | {'auto, fmpy calls':>17} | contacts | target >= 10x (auto)"
+        + f" | {'auto, fmpy calls':>17} | {'auto, C master':>17} | contacts | target >= 10x (auto)"
     )
     reference = simulate_me(scene, LAW, rtol=1e-12).contact_records["t_onset"][:3]
 
@@ -239,8 +284,9 @@ def main() -> None:
         for rtol in args.rtol:
             for dt in args.grid:
                 walls: dict[str, list[float]] = {"me": [], "fmpy": [], **{m: [] for m in METHODS}}
+                walls["c"] = []
                 contacts = {}
-                for _ in range(args.repeats):
+                for _ in range(args.repeats):  # the variants in turn (same machine state)
                     wall, contacts["me"] = loops.run_me(rtol, dt)
                     walls["me"].append(wall)
                     for m, value in METHODS.items():
@@ -248,6 +294,11 @@ def main() -> None:
                         walls[m].append(wall)
                     wall, contacts["fmpy"] = loops.run_cs(rtol, dt, METHODS["auto"], wrappers=True)
                     walls["fmpy"].append(wall)
+                    if master is not None:
+                        wall, contacts["c"] = loops.run_c_master(master, rtol, dt, 1)
+                        walls["c"].append(wall)
+                if not walls["c"]:
+                    walls["c"] = [math.nan]
                 t = {k: float(np.median(v)) for k, v in walls.items()}
                 err = {"me": error(simulate_me(scene, LAW, rtol=rtol, output_interval=dt))}
                 for m, value in METHODS.items():
@@ -263,10 +314,11 @@ def main() -> None:
                     f"{1e3 * t[m]:8.1f} ms [{err[m]:8.1e}] {t['me'] / t[m]:5.1f}x" for m in METHODS
                 )
                 ratio = t["me"] / t["auto"]
-                counts = "/".join(str(contacts[k]) for k in ("me", *METHODS, "fmpy"))
+                counts = "/".join(str(contacts.get(k, "-")) for k in ("me", *METHODS, "fmpy", "c"))
                 print(
                     f"  {rtol:6.0e} {dt:8.0e} | {1e3 * t['me']:8.1f} ms [{err['me']:8.1e}]     | "
-                    f"{cells} | {1e3 * t['fmpy']:8.1f} ms {t['me'] / t['fmpy']:5.1f}x | {counts} | "
+                    f"{cells} | {1e3 * t['fmpy']:8.1f} ms {t['me'] / t['fmpy']:5.1f}x | "
+                    f"{1e3 * t['c']:8.1f} ms {t['me'] / t['c']:5.1f}x | {counts} | "
                     f"{'met' if ratio >= 10 else 'NOT met'}"
                 )
     finally:

@@ -277,6 +277,8 @@ static void test_counters(void)
         }
         CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, TFMT("prepare (%s)", what));
         memcpy(m.x, x, sizeof(x));
+        m.z.in_contact = 1; /* the contact mode the event update sets (the force acts in it only) */
+        m.z.onset_speed = 0.5;
         for (int k = 0; k < 5; k++) {
             CHECK_INT(csfh_model_derivatives(&m, x, xdot), CSFH_OK, TFMT("derivatives OK (%s)", what));
         }
@@ -366,10 +368,17 @@ static void test_derivatives(void)
     const double rho = 1e-5, v = 0.5;
     const double delta = m.d.delta;
     double x2[6] = {0.0, -(delta + rho), 0.0, 0.0, -v, 0.0};
-    /* not yet in contact mode (a state the integrator probes before the event): onset = own rate */
+    /* not yet in contact mode (a state the integrator probes before it located the onset): the
+     * relation gap < 0 is frozen between events, so only gravity acts */
     CHECK_INT(csfh_model_derivatives(&m, x2, xdot), CSFH_OK, "contact: OK");
+    CHECK_CLOSE(xdot[4], -9.81, 1e-12, "probe before the event: no contact force (frozen mode)");
+    /* contact_by_gap (the paper's fixed-step RK4): the force acts wherever the gap is negative,
+     * with the state's own rate as the onset rate */
+    m.contact_by_gap = 1;
+    CHECK_INT(csfh_model_derivatives(&m, x2, xdot), CSFH_OK, "contact by gap: OK");
+    m.contact_by_gap = 0;
     const double FN1 = K * pow(rho, 1.5) * (1.0 + 0.1425);
-    CHECK_CLOSE(xdot[4], (FN1 - 98.1) / 10.0, 1e-9, "contact probe: F_N = K rho^1.5 (1 + xi)");
+    CHECK_CLOSE(xdot[4], (FN1 - 98.1) / 10.0, 1e-9, "contact by gap: F_N = K rho^1.5 (1 + xi)");
     CHECK_ABS(xdot[3], 0.0, 1e-12, "central contact: no horizontal force");
     CHECK_ABS(xdot[5], 0.0, 1e-12, "central contact: no moment");
     /* in contact mode with the onset speed captured at the event */
@@ -549,6 +558,8 @@ static double energy_drift(int flex, double h, int *contacts, double *E0_out)
     m.p.friction_enabled = 0;
     m.p.flexure_enabled = flex;
     m.p.conservative = 1;
+    /* fixed steps that do not locate the onset: the force acts by the gap (the paper's RK4) */
+    m.contact_by_gap = 1;
     if (!flex) { /* PHYSICS 7.5: q0 = [0, 0.01, 0], u0 = [0.3, 0, 0.5] */
         const double x0[6] = {0.0, 0.01, 0.0, 0.3, 0.0, 0.5};
         memcpy(m.x, x0, sizeof(x0));

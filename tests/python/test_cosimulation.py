@@ -300,6 +300,59 @@ def test_communication_grid_costs_no_integration_steps(
     np.testing.assert_allclose(fine[2], coarse[2], rtol=1e-12, atol=1e-14)
 
 
+def test_a_compiled_master_runs_the_fmu(
+    fmu_path: Path, model_description: ModelDescription, vr: dict[str, int]
+) -> None:
+    """benchmarks/master/bench_cs_master.c, a plain C importer (dlopen, fmi2Instantiate, start
+    values, fmi2DoStep loop; no fmpy), runs the FMU binary to the same state and contact count
+    as csfh.simulate_cs (the trajectory does not depend on the communication grid)."""
+    import json
+    import subprocess
+
+    root = Path(__file__).resolve().parents[2]
+    master = root / "build" / "bench_cs_master"
+    if not master.is_file():
+        if (root / "build").is_dir():
+            pytest.fail(f"{master} not built: cmake --build build")
+        pytest.skip("no build tree")
+    scene = load_scene("csfh")
+    directory = Path(fmpy.extract(str(fmu_path)))
+    kind = {
+        v.name: {"Real": "r", "Boolean": "b"}.get(v.type, "i")
+        for v in model_description.modelVariables
+    }
+    starts = [
+        f"{vr[name]}:{kind[name]}={float(value)!r}"
+        for name, value in {
+            **scene.parameter_values("LN_spheres"),
+            **dict(zip(STATES, scene.x0, strict=True)),
+        }.items()
+    ]
+    out = subprocess.run(
+        [
+            str(master),
+            str(directory / "binaries" / "linux64" / "csfh.so"),
+            model_description.guid,
+            "1e-6",
+            "1e-3",
+            "0.3",
+            "1",
+            ",".join(str(vr[n]) for n in STATES),
+            str(vr["contact.count"]),
+            *starts,
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    result = json.loads(out.stdout)
+    tr = simulate_cs(scene, "LN_spheres", rtol=1e-6, communication_step=0.1, stop_time=0.3)
+    final = np.array([tr.table[n][-1] for n in ("x", "y", "theta", "vx", "vy", "omega")])
+    assert result["steps"] == 300
+    assert result["count"][0] == len(tr.contact_records["t_onset"]) >= 3
+    np.testing.assert_allclose(result["read"], final, rtol=1e-12, atol=1e-14)
+
+
 def test_rollback_in_a_master_loop(
     make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int]
 ) -> None:
