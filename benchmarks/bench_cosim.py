@@ -28,18 +28,17 @@ Run: python benchmarks/bench_cosim.py [--repeats 5] [--rtol 1e-6 1e-8] [--grid 1
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import os
 import statistics
-import subprocess
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import c_master
 import fmpy
 import numpy as np
+from c_master import default_master, run_c_master
 
 from csfh import load_scene, model_info
 from csfh.direct_calls import DirectCalls
@@ -62,9 +61,7 @@ def interleaved(variants: dict[str, Callable[[], Any]], repeats: int) -> dict[st
 
 
 def start_values(scene: Scene) -> dict[str, Any]:
-    values: dict[str, Any] = dict(scene.parameter_values(LAW))
-    values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
-    return values
+    return c_master.start_values(scene, LAW)
 
 
 def _setup(fmu: Any, scene: Scene, rtol: float, extra: dict[str, Any] | None = None) -> None:
@@ -93,8 +90,6 @@ class Loops:
 
         md = model_info.model_description()
         directory = fmpy.extract(str(fmu_path()))
-        self.binary = str(Path(directory) / "binaries" / "linux64" / "csfh.so")
-        self.guid = md.guid
         self.scene = scene
         self.refs = [model_info.variables()[n].valueReference for n in STATE_NAMES]
         self.count = model_info.variables()["contact.count"].valueReference
@@ -180,30 +175,16 @@ class Loops:
 
     def run_c_master(self, master: Path, rtol: float, dt: float, repeats: int) -> tuple[float, int]:
         """The same CS loop (method auto) from the compiled master: median loop time."""
-        variables = model_info.variables()
-        starts = []
-        for name, value in {**start_values(self.scene), "solver.method": METHODS["auto"]}.items():
-            kind = {"Real": "r", "Boolean": "b"}.get(variables[name].type, "i")
-            starts.append(f"{variables[name].valueReference}:{kind}={float(value)!r}")
-        out = subprocess.run(
-            [
-                str(master),
-                self.binary,
-                self.guid,
-                repr(rtol),
-                repr(dt),
-                repr(self.scene.stop_time),
-                str(repeats),
-                ",".join(map(str, self.refs)),
-                str(self.count),
-                *starts,
-            ],
-            check=True,
-            capture_output=True,
-            text=True,
+        run = run_c_master(
+            master,
+            self.scene,
+            LAW,
+            rtol=rtol,
+            communication_step=dt,
+            repeats=repeats,
+            extra={"solver.method": METHODS["auto"]},
         )
-        result = json.loads(out.stdout)
-        return float(result["loop_seconds"]), int(result["count"][0])
+        return run.loop_seconds, run.counts[0]
 
     def free(self) -> None:
         self.me.freeInstance()
@@ -215,11 +196,10 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--rtol", type=float, nargs="+", default=[1e-6, 1e-8])
     ap.add_argument("--grid", type=float, nargs="+", default=[1e-2, 1e-3, 1e-4])
-    default_master = Path(__file__).parents[1] / "build" / "bench_cs_master"
     ap.add_argument(
         "--master",
         type=Path,
-        default=Path(os.environ.get("CSFH_CS_MASTER", default_master)),
+        default=default_master(),
         help="the compiled master (cmake --build build builds build/bench_cs_master)",
     )
     args = ap.parse_args()

@@ -10,16 +10,26 @@ the ratios of RHS evaluations and of wall time (medians of repeats, in one run).
 fewer RHS evaluations and >= 10x less wall time.
 
 CS wall time is the time spent in fmi2DoStep with the FMU observed every 10 ms (to read the
-contact events), which includes creating CVODE at the first step; RK4 runs entirely in C.
+contact events), which includes creating CVODE at the first step; RK4 runs entirely in C. Each
+fmi2DoStep from Python costs more than the same call from C (the ctypes call, and CVODE's code
+and data are no longer in the caches after the interpreter's work between calls), so the matched
+CS run is timed also in the compiled master (master/bench_cs_master.c, built as
+build/bench_cs_master; its loop after a warm-up run, the same 10 ms grid): the wall time a C/C++
+importer pays.
 
 Run: python benchmarks/bench_event_vs_rk4.py [--scene central] [--repeats 7]
+     [--master build/bench_cs_master]
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import statistics
 from dataclasses import replace
+from pathlib import Path
+
+from c_master import default_master, run_c_master
 
 from csfh import load_scene
 from csfh.accuracy import contact_errors
@@ -43,13 +53,22 @@ def main() -> None:
     ap.add_argument("--scene", default="central")
     ap.add_argument("--horizon", type=float, default=0.42, help="s (first three contacts)")
     ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument(
+        "--master",
+        type=Path,
+        default=default_master(),
+        help="the compiled master (cmake --build build builds build/bench_cs_master)",
+    )
     args = ap.parse_args()
+    master = args.master if args.master.is_file() else None
+    if master is None:
+        print(f"no compiled master at {args.master}: the C-master columns are left empty")
     scene = replace(load_scene(args.scene), stop_time=args.horizon)
     print(f"scene {scene.name}, horizon {args.horizon} s, medians of {args.repeats} runs\n")
     header = (
         f"{'model':<13} {'RK4 h0, tol':<16} {'error [s]':>9} {'RHS':>8} {'wall':>9} | "
         f"{'CS rtol':>7} {'error [s]':>9} {'RHS':>6} {'wall':>9} | "
-        f"{'RHS ratio':>9} {'wall ratio':>10}"
+        f"{'RHS ratio':>9} {'wall ratio':>10} | {'C master':>9} {'wall ratio':>10}"
     )
     print(header)
     print("-" * len(header))
@@ -81,9 +100,20 @@ def main() -> None:
             )
             if ok:
                 rtol, cerr, crhs, cwall = min(ok, key=lambda c: c[2])
+                c_wall = math.nan
+                if master is not None:
+                    c_wall = run_c_master(
+                        master,
+                        scene,
+                        model,
+                        rtol=rtol,
+                        communication_step=1e-2,
+                        repeats=args.repeats,
+                    ).loop_seconds
                 line += (
                     f"{rtol:7.0e} {cerr:9.2e} {crhs:6d} {cwall:9.2e} | "
-                    f"{tr.stats['rhs_evaluations'] / crhs:9.1f} {wall / cwall:10.2f}"
+                    f"{tr.stats['rhs_evaluations'] / crhs:9.1f} {wall / cwall:10.2f} | "
+                    f"{c_wall:9.2e} {wall / c_wall:10.2f}"
                 )
             else:
                 line += "no CS run reaches this error"

@@ -1,0 +1,96 @@
+"""Run the co-simulation loop of the FMU in the compiled master (master/bench_cs_master.c, built
+as build/bench_cs_master): fmi2DoStep from grid point to grid point as a C/C++ importer runs the
+FMU, with no Python per communication point. Shared by bench_cosim.py and bench_event_vs_rk4.py.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import fmpy
+
+from csfh import model_info
+from csfh.fmu_runner import STATE_NAMES
+from csfh.scene import Scene
+
+DEFAULT_MASTER = Path(__file__).parents[1] / "build" / "bench_cs_master"
+
+
+def default_master() -> Path:
+    """The compiled master: $CSFH_CS_MASTER, else build/bench_cs_master."""
+    return Path(os.environ.get("CSFH_CS_MASTER", DEFAULT_MASTER))
+
+
+@cache
+def _binary() -> str:
+    from csfh._paths import fmu_path
+
+    directory = fmpy.extract(str(fmu_path()))
+    return str(Path(directory) / "binaries" / "linux64" / "csfh.so")
+
+
+def start_values(scene: Scene, law: str, extra: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The scene's parameters for `law`, its initial state and inputs, and `extra`."""
+    values: dict[str, Any] = dict(scene.parameter_values(law))
+    values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
+    values.update(scene.inputs)
+    values.update(extra or {})
+    return values
+
+
+@dataclass(frozen=True)
+class MasterRun:
+    loop_seconds: float  # median over the timed repeats (after one untimed warm-up run)
+    steps: int  # communication steps per run
+    final: list[float]  # the READ reals at the end
+    counts: list[int]  # the COUNT integers at the end
+
+
+def run_c_master(
+    master: Path,
+    scene: Scene,
+    law: str,
+    *,
+    rtol: float,
+    communication_step: float,
+    repeats: int,
+    read: tuple[str, ...] = STATE_NAMES,
+    count: tuple[str, ...] = ("contact.count",),
+    extra: dict[str, Any] | None = None,
+) -> MasterRun:
+    """Run `scene` with `law` in the compiled master; the loop's median wall time and results."""
+    variables = model_info.variables()
+    starts = []
+    for name, value in start_values(scene, law, extra).items():
+        kind = {"Real": "r", "Boolean": "b"}.get(variables[name].type, "i")
+        starts.append(f"{variables[name].valueReference}:{kind}={float(value)!r}")
+    out = subprocess.run(
+        [
+            str(master),
+            _binary(),
+            model_info.model_description().guid,
+            repr(rtol),
+            repr(communication_step),
+            repr(scene.stop_time),
+            str(repeats),
+            ",".join(str(variables[n].valueReference) for n in read),
+            ",".join(str(variables[n].valueReference) for n in count),
+            *starts,
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    result = json.loads(out.stdout)
+    return MasterRun(
+        loop_seconds=float(result["loop_seconds"]),
+        steps=int(result["steps"]),
+        final=[float(v) for v in result["read"]],
+        counts=[int(v) for v in result["count"]],
+    )
