@@ -17,6 +17,7 @@
  * The headers are fmpy's FMI 2.0 headers, as for the FMU itself. */
 #define _POSIX_C_SOURCE 200809L
 #include <dlfcn.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -163,9 +164,22 @@ int main(int argc, char **argv)
     fmi2ValueReference read[MAX_REFS], count[MAX_REFS];
     const size_t n_read = parse_refs(argv[7], read), n_count = parse_refs(argv[8], count);
     const long n_steps = (long)(stop / h + 0.5);
-    if (!(rtol > 0.0) || !(h > 0.0) || n_steps < 1 || repeats < 1 || repeats > MAX_REPEATS) {
-        fprintf(stderr, "bench_cs_master: bad RTOL, H, STOP or REPEATS\n");
-        return 2;
+    /* each argument checked on its own: the message names it and its value */
+    const struct {
+        int ok;
+        int arg;
+        const char *rule;
+    } checks[] = {
+        {rtol > 0.0 && isfinite(rtol), 3, "RTOL must be > 0"},
+        {h > 0.0 && isfinite(h), 4, "H must be > 0"},
+        {isfinite(stop) && n_steps >= 1, 5, "STOP must be >= H"},
+        {repeats >= 1 && repeats <= MAX_REPEATS, 6, "REPEATS must be 1..101"},
+    };
+    for (size_t i = 0; i < sizeof(checks) / sizeof(checks[0]); i++) {
+        if (!checks[i].ok) {
+            fprintf(stderr, "bench_cs_master: %s, got %s\n", checks[i].rule, argv[checks[i].arg]);
+            return 2;
+        }
     }
     void *dll = dlopen(binary, RTLD_NOW | RTLD_LOCAL);
     if (dll == NULL) {
