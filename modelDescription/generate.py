@@ -63,6 +63,10 @@ def c_names(spec: dict) -> tuple[str, str, str, str]:
     )
 
 
+# [default_experiment] of a spec without one
+DEFAULT_EXPERIMENT = {"startTime": 0.0, "stopTime": 1.0, "tolerance": 1e-6}
+
+
 class SpecError(Exception):
     pass
 
@@ -205,7 +209,16 @@ def xml_model_description(spec: dict, guid: str) -> str:
     )
     w('    <Category name="logAll" description="Every FMI call"/>')
     w("  </LogCategories>")
-    w('  <DefaultExperiment startTime="0" stopTime="1" tolerance="1e-06"/>')
+    experiment = spec.get("default_experiment", DEFAULT_EXPERIMENT)
+    w(
+        "  <DefaultExperiment "
+        + " ".join(
+            f'{key}="{fmt_xml_real(experiment[key])}"'
+            for key in ("startTime", "stopTime", "tolerance", "stepSize")
+            if key in experiment
+        )
+        + "/>"
+    )
     w("  <ModelVariables>")
     for i, v in enumerate(variables, start=1):
         attrs = [f"name={quoteattr(v['name'])}", f'valueReference="{v["vr"]}"']
