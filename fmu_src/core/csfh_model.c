@@ -273,6 +273,20 @@ void csfh_model_init_discrete(csfh_model_t *m)
     csfh_model_event_update(m);
 }
 
+int csfh_model_peak_values(csfh_model_t *m, const double x[6], double v[CSFH_N_PEAKS])
+{
+    v[0] = v[1] = v[2] = 0.0;
+    if (!m->z.in_contact || m->p.law == CSFH_CONTACTLAW_NONE) {
+        return 0;
+    }
+    csfh_contact_eval_t c;
+    csfh_model_contact(m, x, x + 3, &c);
+    v[0] = c.F_N;
+    v[1] = fabs(c.F_T);
+    v[2] = c.rho;
+    return 1;
+}
+
 int csfh_model_outputs(csfh_model_t *m)
 {
     csfh_outputs_t *o = &m->out;
@@ -304,5 +318,11 @@ int csfh_model_outputs(csfh_model_t *m)
     }
     o->E_contact = c.touching ? csfh_normal_elastic_energy(&m->d.normal, c.rho) : 0.0;
     o->E_total = o->E_kinetic + o->E_gravity + o->E_flexure + o->E_contact;
+    /* peaks: the communication step's so far (co-simulation), and the current values */
+    const double now[CSFH_N_PEAKS] = {o->F_N, fabs(o->F_T), o->indentation};
+    double *peak[CSFH_N_PEAKS] = {&o->F_N_peak, &o->F_T_peak, &o->indentation_peak};
+    for (int j = 0; j < CSFH_N_PEAKS; j++) {
+        *peak[j] = m->peaks.active && m->peaks.v[j] > now[j] ? m->peaks.v[j] : now[j];
+    }
     return c.status == CSFH_LAW_ESDU_CLAMPED ? CSFH_WARN_ESDU_CLAMPED : CSFH_OK;
 }

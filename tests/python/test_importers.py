@@ -35,7 +35,7 @@ from csfh.scene import Scene, load_scene
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ("central", "asymmetric", "csfh")
 LAW = "LN_spheres"
-OUTPUTS = (*STATE_NAMES, "contact.gap", "contact.F_N", "energy.total")
+OUTPUTS = (*STATE_NAMES, "contact.gap", "contact.F_N", "energy.total", "contact.F_N_peak")
 COLUMN = {"body1.x": "x", "body1.y": "y", "body1.vy": "vy", "contact.F_N": "F_N"}
 G = 9.81
 

@@ -63,3 +63,73 @@ def test_every_contact_mode_switch_asks_the_importer_to_restart(
     # an event that switches nothing (the importer's indicator noise) asks for no restart
     fmu.enterEventMode()
     assert fmu.newDiscreteStates()[3] is False
+
+
+@pytest.fixture(scope="module")
+def csfh_reference():
+    """The harness's model-exchange run of the csfh scene (the FMU's start values) at rtol 1e-10:
+    per contact, the peak F_N and indentation refined on CVODE's interpolant."""
+    from csfh.fmu_runner import simulate_me
+    from csfh.scene import load_scene
+
+    return simulate_me(load_scene("csfh"), "LN_spheres", rtol=1e-10, output_interval=1e-3)
+
+
+@pytest.mark.parametrize(("rtol", "tol"), [(None, 1e-3), (1e-10, 1e-6)])
+def test_bare_co_simulation_reports_the_peaks(
+    fmu_path, csfh_reference, rtol: float | None, tol: float
+) -> None:
+    """A bare co-simulation run (fmpy.simulate_fmu, 1e-2 s communication steps, the FMU's
+    defaults) reports in each step that holds whole contacts the largest F_N and indentation the
+    harness finds for them (relative error: the integrator's own, <= 1e-3 at the default rtol
+    1e-6, where it is 1.6e-4; <= 1e-6 at rtol 1e-10): the peak is located inside the step, not
+    sampled at the communication points, where F_N is at most 44 % of it."""
+    import fmpy
+    import numpy as np
+
+    kwargs = {} if rtol is None else {"relative_tolerance": rtol}
+    names = ["contact.F_N", "contact.F_N_peak", "contact.indentation_peak", "contact.F_T_peak"]
+    r = fmpy.simulate_fmu(
+        str(fmu_path), fmi_type="CoSimulation", output_interval=1e-2, output=names, **kwargs
+    )
+    t = r["time"]
+    cr = csfh_reference.contact_records
+    checked = 0
+    for k in range(1, len(t)):
+        inside = (cr["t_onset"] > t[k - 1]) & (cr["t_onset"] <= t[k])
+        if not inside.any() or not np.all(cr["t_release"][inside] <= t[k]):
+            continue  # no contact, or one that goes on into the next step
+        for name, field in (("contact.F_N_peak", "peak_F_N"),
+                            ("contact.indentation_peak", "max_indentation")):
+            expected = float(np.max(cr[field][inside]))
+            assert r[name][k] == pytest.approx(expected, rel=tol), (name, t[k])
+        checked += 1
+    assert checked >= 8
+    assert np.max(r["contact.F_N"]) < 0.5 * np.max(cr["peak_F_N"])  # what sampling shows
+    # F_T_peak: |F_T| <= f_d F_N at every instant, so also for the peaks; and it is not zero
+    assert np.all(r["contact.F_T_peak"] <= 0.055 * r["contact.F_N_peak"] * (1 + 1e-12))
+    assert np.max(r["contact.F_T_peak"]) > 0
+
+
+def test_peaks_are_the_instantaneous_values_without_a_communication_step(
+    make_fmu: MakeFmu, vr: dict[str, int]
+) -> None:
+    """Model exchange (no communication step) and co-simulation before its first step: the peak
+    outputs are F_N, |F_T| and the indentation at the current state; a zero-length step keeps
+    that."""
+    peaks = [vr[n] for n in ("contact.F_N_peak", "contact.F_T_peak", "contact.indentation_peak")]
+    now = [vr[n] for n in ("contact.F_N", "contact.F_T", "contact.indentation")]
+    for kind in ("ME", "CS"):
+        fmu, _ = make_fmu(kind)
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        # in contact from the start, sliding: F_N, F_T and the indentation are all > 0
+        fmu.setReal([vr["body1.x"], vr["body1.y"], vr["body1.vx"], vr["body1.vy"]],
+                     [0.0, -0.02 - 5e-5, 0.3, -0.1])
+        fmu.exitInitializationMode()
+        F_N, F_T, rho = fmu.getReal(now)
+        assert F_N > 0 and F_T != 0 and rho > 0
+        assert fmu.getReal(peaks) == [F_N, abs(F_T), rho]
+        if kind == "CS":
+            fmu.doStep(0.0, 0.0)
+            assert fmu.getReal(peaks) == [F_N, abs(F_T), rho]
