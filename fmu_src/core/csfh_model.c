@@ -263,6 +263,26 @@ int csfh_model_event_update(csfh_model_t *m)
     return 0;
 }
 
+int csfh_model_check_start(const csfh_model_t *m, char *msg, size_t msg_size)
+{
+    if (m->p.law == CSFH_CONTACTLAW_NONE) {
+        return 0;
+    }
+    /* indentation = -g, the gap of PHYSICS.md section 3 */
+    const double indentation = -csfh_contact_gap(m->d.delta, m->p.s1bar, m->x);
+    if (!(indentation > m->p.max_initial_indentation)) {
+        return 0;
+    }
+    char b[4][32];
+    snprintf(msg, msg_size,
+             "the start state body1.x = %s m, body1.y = %s m, body1.theta = %s rad is %.6g m deep "
+             "in the bore (contact.indentation = %.6g m > contact.max_initial_indentation = %s m)",
+             csfh_format_value(b[0], m->x[0]), csfh_format_value(b[1], m->x[1]),
+             csfh_format_value(b[2], m->x[2]), indentation, indentation,
+             csfh_format_value(b[3], m->p.max_initial_indentation));
+    return -1;
+}
+
 void csfh_model_init_discrete(csfh_model_t *m)
 {
     m->z.in_contact = 0;

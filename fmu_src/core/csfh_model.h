@@ -32,6 +32,7 @@ typedef struct {
     int esdu_sigma_pi;
     double v_min;      /* m/s */
     double gap_hysteresis; /* m */
+    double max_initial_indentation; /* m: deepest start state accepted */
     /* friction */
     int friction_enabled;
     double fd, fa, v0, v1;
@@ -127,6 +128,12 @@ int *csfh_variable_int(csfh_model_t *m, const csfh_variable_t *v);
  * compute the derived quantities. Returns 0 on success, -1 with a message otherwise (the derived
  * quantities are then left unchanged). */
 int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size);
+
+/* The start state must not be deeper in the bore than contact.max_initial_indentation (a start
+ * far inside the clearance is a typo, and the contact law would answer it with an unphysical
+ * force): 0, or -1 with a message naming the state and the indentation. No check without a
+ * contact law. */
+int csfh_model_check_start(const csfh_model_t *m, char *msg, size_t msg_size);
 
 /* Set the discrete contact state from the initial continuous state (end of initialization). */
 void csfh_model_init_discrete(csfh_model_t *m);

@@ -17,6 +17,11 @@ static int prepare(void *m, char *msg, size_t msg_size)
     return csfh_model_prepare((csfh_model_t *)m, msg, msg_size);
 }
 
+static int check_start(void *m, char *msg, size_t msg_size)
+{
+    return csfh_model_check_start((const csfh_model_t *)m, msg, msg_size);
+}
+
 static void init_discrete(void *mv, char *msg, size_t msg_size)
 {
     csfh_model_t *m = (csfh_model_t *)mv;
@@ -139,6 +144,7 @@ const fmu_model_t fmu_model = {
     .der_offset = offsetof(csfh_model_t, der),
     .set_defaults = set_defaults,
     .prepare = prepare,
+    .check_start = check_start,
     .init_discrete = init_discrete,
     .derivatives = derivatives,
     .event_indicators = event_indicators,

@@ -371,6 +371,10 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     }
     char msg[MSG_SIZE];
     msg[0] = '\0';
+    if (fmu_model.check_start != NULL && fmu_model.check_start(inst->model, msg, sizeof(msg)) != 0) {
+        LOG_ERROR(inst, "fmi2ExitInitializationMode: %s", msg);
+        return fmi2Error;
+    }
     fmu_model.init_discrete(inst->model, msg, sizeof(msg));
     fmu_invalidate(inst);
     if (msg[0] != '\0') {

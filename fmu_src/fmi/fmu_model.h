@@ -47,6 +47,9 @@ typedef struct {
     /* Validate every parameter, input and state start value, compute derived quantities.
      * 0, or -1 with a message naming the variable and its value. */
     int (*prepare)(void *m, char *msg, size_t msg_size);
+    /* End of initialization, after prepare: check the start state (may be NULL); 0, or -1 with
+     * a message naming the values. */
+    int (*check_start)(void *m, char *msg, size_t msg_size);
     /* End of initialization: set the discrete state from the initial continuous state. Writes a
      * logEvents message (or an empty string). */
     void (*init_discrete)(void *m, char *msg, size_t msg_size);

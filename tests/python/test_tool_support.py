@@ -133,3 +133,63 @@ def test_peaks_are_the_instantaneous_values_without_a_communication_step(
         if kind == "CS":
             fmu.doStep(0.0, 0.0)
             assert fmu.getReal(peaks) == [F_N, abs(F_T), rho]
+
+
+@pytest.mark.parametrize("kind", ["ME", "CS"])
+def test_a_start_deep_in_the_bore_is_refused(
+    make_fmu: MakeFmu, vr: dict[str, int], kind: str
+) -> None:
+    """q0 = [0.05, 0, 0] with the clearance 0.02 m is 0.03 m deep: fmi2ExitInitializationMode
+    returns fmi2Error naming the state and the indentation (before: a silent run with
+    F_N = 2.5e8 N); at the limit it starts, and the limit is a parameter."""
+    from fmpy.fmi1 import FMICallException
+
+    fmu, log = make_fmu(kind)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setReal([vr["body1.x"], vr["body1.y"]], [0.05, 0.0])
+    with pytest.raises(FMICallException):
+        fmu.exitInitializationMode()
+    message = log.errors()[-1]
+    assert "body1.x = 0.05 m, body1.y = 0 m, body1.theta = 0 rad" in message
+    assert "contact.indentation = 0.03 m > contact.max_initial_indentation = 0.001 m" in message
+    # just inside the limit: accepted; and a larger limit accepts the deep start
+    for x, limit in ((0.02 + 0.999e-3, None), (0.05, 0.04)):
+        fmu, log = make_fmu(kind)
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.setReal([vr["body1.x"], vr["body1.y"]], [x, 0.0])
+        if limit is not None:
+            fmu.setReal([vr["contact.max_initial_indentation"]], [limit])
+        fmu.exitInitializationMode()
+        assert fmu.getBoolean([vr["contact.active"]])[0]
+
+
+def test_scene_loader_refuses_a_deep_start(tmp_path) -> None:
+    """The scene loader says the same in one line, and the CLI exits 2 with it."""
+    import subprocess
+    import sys
+
+    from csfh.scene import SceneError, scene_from_dict
+
+    with pytest.raises(SceneError) as info:
+        scene_from_dict({"name": "deep", "initial": {"q": [0.05, 0.0, 0.0]}})
+    assert "\n" not in str(info.value)
+    assert "0.03 m deep" in str(info.value) and "contact.max_initial_indentation" in str(info.value)
+    path = tmp_path / "huge.toml"
+    path.write_text('name = "huge"\n[initial]\nq = [1e10, 0.0, 0.0]\n')
+    r = subprocess.run([sys.executable, "-m", "csfh", "run", str(path), "--law", "LN_spheres"], capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "deep in the bore" in r.stderr
+    # an override of the limit lets the scene through
+    scene_from_dict({"name": "deep", "initial": {"q": [0.05, 0.0, 0.0]},
+                     "parameters": {"contact.max_initial_indentation": 0.04}})
+
+
+def test_model_exchange_runner_has_a_step_budget() -> None:
+    from csfh.fmu_runner import SimulationError, simulate_me
+    from csfh.scene import load_scene
+
+    with pytest.raises(SimulationError, match="step budget"):
+        simulate_me(load_scene("central"), "LN_spheres", max_steps=200)
