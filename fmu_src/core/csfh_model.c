@@ -83,6 +83,17 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
     if (check_all_values(m, msg, msg_size) != 0) {
         return -1;
     }
+    /* the Enumeration parameters set as Integers (for importers that ignore Enumerations); the
+     * numbers are range-checked above like the Enumerations */
+    if (m->p.law_number != 0) {
+        m->p.law = m->p.law_number;
+    }
+    if (m->p.esdu_reading_number != 0) {
+        m->p.esdu_reading = m->p.esdu_reading_number;
+    }
+    if (m->cs_method_number != 0) {
+        m->cs_method = m->cs_method_number;
+    }
     /* cross-checks */
     char b1[32], b2[32];
     if (!(p->R1 < p->R2)) {

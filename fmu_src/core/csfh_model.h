@@ -21,6 +21,7 @@ typedef struct {
     double g;          /* m/s^2, along -Y */
     /* contact */
     int law;           /* csfh_contact_law_t */
+    int law_number, esdu_reading_number; /* 0, or the enumeration value to set (libcosim) */
     double R1, R2;     /* m */
     double E1, E2, nu1, nu2;
     double L;          /* contact length, m */
@@ -94,6 +95,7 @@ typedef struct {
     csfh_counters_t counters;
     csfh_peaks_t peaks;
     int cs_method;      /* solver.method (CvodeMethod): read by the co-simulation glue only */
+    int cs_method_number; /* 0, or the solver.method value to set (libcosim) */
     int contact_by_gap; /* 1: the contact force acts wherever the gap is negative, also before
                          * the onset event (the paper's RK4 scheme, which has no root finding
                          * and bisects the step instead); 0 (default): in the contact mode only */
