@@ -5,7 +5,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 missing=()
-for pkg in libsundials-dev cmake ninja-build gcc; do
+# libtbb12: the Ecos co-simulation engine (ecospy, tests/python/test_registry_importers.py)
+for pkg in libsundials-dev cmake ninja-build gcc libtbb12; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
 done
 if [ ${#missing[@]} -gt 0 ]; then

@@ -51,7 +51,8 @@ Scene section (all keys optional except the voltage ramp):
 
 The rest of the scene (initial state, parts, parameters, stop_time, preset) sets up the hinge as
 for every other command; its contact law is the scene's (the FMU default LN_spheres unless
-[parameters] sets contact.law). libcosim (libcosimpy 0.0.6) ignores FMI 2.0 Enumeration
+[parameters] sets contact.law; the libcosimpy engine sets its Integer twin contact.law_number).
+libcosim (libcosimpy 0.0.6) ignores FMI 2.0 Enumeration
 variables, so with that engine an enumeration can only keep its FMU start value.
 """
 
@@ -617,12 +618,16 @@ def run_libcosimpy(
         for name, value in values.items():
             var = variables[name]
             if var.type == "Enumeration":
-                if int(value) != int(var.start):
+                # libcosimpy ignores FMI 2.0 Enumeration variables: set its Integer twin
+                if f"{name}_number" in refs:
+                    name, var = f"{name}_number", variables[f"{name}_number"]
+                elif int(value) != int(var.start):
                     raise CosimError(
                         f"libcosimpy ignores FMI 2.0 Enumeration variables: {name} = {value} "
                         f"cannot be set (the FMU default is {var.start}); use the fmpy engine"
                     )
-                continue
+                else:
+                    continue
             if var.type == "Real":
                 ok = ex.real_initial_value(slave, refs[name], float(value))
             elif var.type == "Boolean":

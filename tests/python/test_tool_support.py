@@ -178,8 +178,8 @@ def test_scene_loader_refuses_a_deep_start(tmp_path) -> None:
     assert "0.03 m deep" in str(info.value) and "contact.max_initial_indentation" in str(info.value)
     path = tmp_path / "huge.toml"
     path.write_text('name = "huge"\n[initial]\nq = [1e10, 0.0, 0.0]\n')
-    r = subprocess.run([sys.executable, "-m", "csfh", "run", str(path), "--law", "LN_spheres"], capture_output=True,
-                       text=True, timeout=120)
+    r = subprocess.run([sys.executable, "-m", "csfh", "run", str(path), "--law", "LN_spheres"],
+                       capture_output=True, text=True, timeout=120)
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "deep in the bore" in r.stderr
     # an override of the limit lets the scene through
