@@ -36,7 +36,6 @@ default_role = "literal"  # `name` in docstrings is code
 
 autodoc_member_order = "bysource"
 autodoc_typehints = "signature"
-autodoc_default_options = {"members": False}
 
 html_theme = "furo"
 html_title = f"csfh {release}"
