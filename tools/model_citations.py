@@ -93,7 +93,7 @@ def check(files: list[Path] | None = None) -> list[str]:
 
 def _replacement(m: re.Match[str]) -> str:
     if m.group("a") is None:
-        return "docs/model.md"
+        return "docs/model.md" if m.group("md") else m.group(0)  # a bare word is no citation
     cited = m.group("a") + (f"-{m.group('b')}" if m.group("b") else "")
     return f"docs/model.md §{cited}"
 
