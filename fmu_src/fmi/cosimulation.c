@@ -354,11 +354,11 @@ static int auto_choose(csfh_cvode_t *cv, double t, char *why, size_t why_size)
 /* peak outputs: the largest values of the model's peak quantities over the communication step,
  * on CVODE's interpolant (the dense output of its last step). Each CVODE step is analysed once,
  * when it is taken: its end values, and every maximum inside it (the quantity's slope + at the
- * step's start, <= 0 at its end: the slope's root by bisection). Each part of a communication
+ * step's start, <= 0 at its end: the slope's root by regula falsi). Each part of a communication
  * step then takes the maxima that lie in it; the values at the communication points themselves
  * are the outputs there (the model's outputs take the max with the step's peaks). */
 
-#define PEAK_BISECTIONS 60
+#define PEAK_ITERATIONS 40 /* regula falsi (Illinois) on the slope: a few are used */
 
 /* The peak quantities v at time t of CVODE's last step, and their time derivatives (a forward
  * difference along the interpolant's derivative) in slope; 0 when the model has nothing to
@@ -419,16 +419,30 @@ static void peak_step(fmu_instance_t *inst)
             if (!(s0[j] > 0.0 && s1[j] <= 0.0)) {
                 continue;
             }
-            double lo = t0, hi = tn, v[FMU_MAX_PEAKS], s[FMU_MAX_PEAKS];
-            for (int k = 0; k < PEAK_BISECTIONS && hi - lo > 4.0 * DBL_EPSILON * fabs(hi); k++) {
-                const double mid = 0.5 * (lo + hi);
+            /* the root of the slope: regula falsi with the Illinois modification (a few
+             * evaluations; the value is flat there, so a time 1e-7 of the step off changes it
+             * by ~1e-14 relative) */
+            double lo = t0, hi = tn, f_lo = s0[j], f_hi = s1[j], v[FMU_MAX_PEAKS], s[FMU_MAX_PEAKS];
+            int side = 0;
+            for (int k = 0; k < PEAK_ITERATIONS && hi - lo > 1e-7 * hu; k++) {
+                double mid = hi - f_hi * (hi - lo) / (f_hi - f_lo);
+                if (!(mid > lo && mid < hi)) {
+                    mid = 0.5 * (lo + hi);
+                }
                 if (!peak_point(inst, mid, v, s)) {
                     break;
                 }
                 if (s[j] > 0.0) {
-                    lo = mid;
+                    lo = mid, f_lo = s[j];
+                    f_hi = side == -1 ? 0.5 * f_hi : f_hi;
+                    side = -1;
                 } else {
-                    hi = mid;
+                    hi = mid, f_hi = s[j];
+                    f_lo = side == 1 ? 0.5 * f_lo : f_lo;
+                    side = 1;
+                }
+                if (s[j] == 0.0) {
+                    lo = hi = mid;
                 }
             }
             const int m = cv->peak_n_max;
