@@ -1,6 +1,6 @@
 """csfh: dynamics of a Conjugate-Surface Flexure Hinge with impacts and friction.
 
-Scenes are TOML files (built-in: central, asymmetric, csfh). Models: the FMU's contact laws
+Scenes are TOML files (built-in: central, asymmetric, csfh, mems). Models: the FMU's contact laws
 LN_spheres, LN_cylinders, LN_ESDU, HuntCrossley, Flores (event-driven) and Moreau."""
 
 from __future__ import annotations
@@ -93,7 +93,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_info)
 
     def common(p: argparse.ArgumentParser) -> None:
-        p.add_argument("scene", help="built-in scene (central, asymmetric, csfh) or a .toml file")
+        p.add_argument(
+            "scene", help="built-in scene (central, asymmetric, csfh, mems) or a .toml file"
+        )
         p.add_argument("--out", help="output directory (default results/SCENE)")
         p.add_argument(
             "--interface",
