@@ -24,7 +24,8 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
 from csfh import fmu_path, load_scene
-from csfh.fmu_runner import STATE_NAMES
+
+STATE_NAMES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
 
 
 def main() -> None:

@@ -27,9 +27,7 @@ from fmpy import simulate_fmu
 from fmpy.model_description import ModelDescription
 from scipy.optimize import minimize
 
-from csfh.moreau import moreau
-from csfh.scene import Scene, load_scene, scene_from_dict
-from csfh.simulate import simulate
+from csfh import Scene, load_scene, moreau, scene_from_dict, simulate
 
 MakeFmu = Callable[..., tuple[Any, Any]]
 
