@@ -12,12 +12,12 @@ the Moreau time stepper, comparisons and reports on top.
 
 from __future__ import annotations
 
-from ._paths import core_library_path, fmu_path
-from .compare import compare
-from .moreau import moreau
-from .results import Trajectory
-from .scene import Scene, SceneError, load_scene, scene_from_dict
-from .simulate import simulate
+from .model.scene import Scene, SceneError, load_scene, scene_from_dict
+from .paths import core_library_path, fmu_path
+from .runners.moreau import moreau
+from .runners.simulate import simulate
+from .studies.compare import compare
+from .trajectory import Trajectory
 
 __all__ = [
     "Scene",

@@ -10,7 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from csfh.accuracy import (
+from csfh.model.scene import load_scene
+from csfh.runners.fmu import simulate_me
+from csfh.runners.moreau import moreau
+from csfh.runners.rk4 import rk4_event
+from csfh.studies.accuracy.study import (
     QUICK_SETTINGS,
     _grid,
     contact_errors,
@@ -18,11 +22,7 @@ from csfh.accuracy import (
     observed_order,
     run_study,
 )
-from csfh.fmu_runner import simulate_me
-from csfh.moreau import moreau
-from csfh.rk4 import rk4_event
-from csfh.scene import load_scene
-from csfh.stress import effective_restitution, run_suite
+from csfh.studies.stress.cases import effective_restitution, run_suite
 
 G, CR = 9.81, 0.9
 

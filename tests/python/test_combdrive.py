@@ -31,7 +31,7 @@ FMI2_EXPORTS = 44  # every fmi2 function of FMI 2.0 (ME and CS)
 
 @pytest.fixture(scope="session")
 def combdrive_path(fmu_path: Path) -> Path:
-    from csfh._paths import combdrive_fmu_path
+    from csfh.paths import combdrive_fmu_path
 
     path = combdrive_fmu_path()
     if not path.exists():

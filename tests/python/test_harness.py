@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from csfh.core import CoreModel
-from csfh.fmu_runner import simulate_me
-from csfh.moreau import core_model, moreau
-from csfh.scene import SceneError, load_scene, scene_from_dict
+from csfh.model.core import CoreModel
+from csfh.model.scene import SceneError, load_scene, scene_from_dict
+from csfh.runners.fmu import simulate_me
+from csfh.runners.moreau import core_model, moreau
 
 G = 9.81
 CR = 0.9
@@ -204,7 +204,7 @@ def test_first_rebound_matches_physics_7_3(
 def test_switched_off_parts_are_never_evaluated(interface: str) -> None:
     """A scene runs only what it needs: flexure/friction off means never evaluated (counters of
     the FMU and of the core library); on means evaluated."""
-    from csfh.simulate import simulate
+    from csfh.runners.simulate import simulate
 
     off = load_scene("central").with_parameters()  # no flexure, no friction
     for model in ("LN_spheres", "Moreau"):
@@ -219,7 +219,7 @@ def test_switched_off_parts_are_never_evaluated(interface: str) -> None:
 
 def test_me_driver_agrees_with_fmpy_simulate_fmu() -> None:
     """Our one-step model-exchange driver and fmpy.simulate_fmu give the same trajectory."""
-    from csfh.fmu_runner import simulate_fmpy
+    from csfh.runners.fmu import simulate_fmpy
 
     scene = load_scene("asymmetric")
     ours = simulate_me(scene, "LN_spheres", rtol=1e-9, stop_time=0.2)
@@ -350,7 +350,7 @@ def test_compare_writes_everything(tmp_path: Path) -> None:
             "parts": {"flexure": True, "friction": True},
         }
     )
-    from csfh.compare import compare
+    from csfh.studies.compare import compare
 
     result = compare(scene, tmp_path)
     names = {p.name for p in result.files}

@@ -6,7 +6,7 @@ import math
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from .accuracy import Point, Study
+    from .study import Point, Study
 
 
 def introduction(study: Study) -> list[str]:
@@ -46,7 +46,7 @@ def _cheapest(points: list[Point], metric: str, target: float, cost: str) -> Poi
 
 
 def conclusions(study: Study, groups: dict[tuple[str, str, str], list[Point]]) -> list[str]:
-    from .accuracy import observed_order
+    from .study import observed_order
 
     lines = ["## What the numbers show", ""]
     for model in dict.fromkeys(p.model for p in study.points):

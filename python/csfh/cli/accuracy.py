@@ -7,8 +7,8 @@ from pathlib import Path
 
 
 def _cmd_accuracy(args: argparse.Namespace) -> int:
-    from .accuracy import DEFAULT_SETTINGS, QUICK_SETTINGS, run_study
-    from .scene import load_scene
+    from ..model.scene import load_scene
+    from ..studies.accuracy.study import DEFAULT_SETTINGS, QUICK_SETTINGS, run_study
 
     scene = load_scene(args.scene)
     out = Path(args.out) if args.out else Path("results") / scene.name / "accuracy"
@@ -44,7 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_stress(args: argparse.Namespace) -> int:
-    from .stress import run_suite
+    from ..studies.stress.cases import run_suite
 
     out = Path(args.out) if args.out else Path("results") / "stress"
     runs = run_suite(out, quick=args.quick, quiet=args.quiet, only=args.only)

@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from .results import Trajectory
+from ..trajectory import Trajectory
 
 STYLE = {
     "LN_spheres": {"color": "tab:blue", "label": "LNA (K spheres)"},

@@ -12,10 +12,10 @@ from typing import Any
 
 import numpy as np
 
-from .core import library
+from ..model.core import library
+from ..model.scene import Scene
+from ..trajectory import CONTACT_FIELDS, Trajectory
 from .moreau import core_model
-from .results import CONTACT_FIELDS, Trajectory
-from .scene import Scene
 
 _RECORD = (
     "t",

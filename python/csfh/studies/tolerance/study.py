@@ -30,10 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from . import model_info
-from .results import write_json
-from .scene import Scene, SceneError, scene_from_dict
-from .tasks import ResultStore, Task
+from ...batch.tasks import ResultStore, Task
+from ...model import model_info
+from ...model.scene import Scene, SceneError, scene_from_dict
+from ...trajectory import write_json
 
 DEFAULT_FILE = "tolerance_csfh"
 QUANTITIES = ("first_contact", "peak_F_N", "peak_abs_F_T")
@@ -152,7 +152,7 @@ def study_from_dict(data: dict[str, Any], source: str) -> ToleranceStudy:
                 raise ToleranceError(f"montecarlo.models: unknown model {m!r}")
     except ToleranceError as exc:
         raise ToleranceError(f"{source}: {exc}") from None
-    from .sweep import nominal_values
+    from ..sweep.analysis import nominal_values
 
     return ToleranceStudy(
         scene=scene,
@@ -215,8 +215,8 @@ def sample(study: ToleranceStudy, k: int) -> dict[str, float]:
 
 def check_samples(study: ToleranceStudy, samples: Sequence[dict[str, float]]) -> None:
     """Every sample must be a valid model (e.g. R1 < R2): the first invalid one is an error."""
-    from .core import ParameterError
-    from .moreau import core_model
+    from ...model.core import ParameterError
+    from ...runners.moreau import core_model
 
     for k, values in enumerate(samples):
         try:
@@ -338,7 +338,7 @@ def plot_histograms(path: Path, study: ToleranceStudy, result: dict[str, Any]) -
     import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
 
-    from .plots import STYLE
+    from ..paper_figures import STYLE
 
     models = list(result["models"])
     columns = (*QUANTITIES, "contacts")

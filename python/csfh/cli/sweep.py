@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .cli import CliError
+from .main import CliError
 
 
 def _positive_int(text: str) -> int:
@@ -120,7 +120,7 @@ def register(sub: Any) -> None:
 
 
 def _check_models(models: list[str] | None, default: tuple[str, ...]) -> tuple[str, ...]:
-    from . import model_info
+    from ..model import model_info
 
     if not models:
         return default
@@ -137,7 +137,7 @@ def _interface_text(interface: str, rtol: float) -> str:
 
 
 def _run(tasks: list[Any], out: Path, args: argparse.Namespace, label: str) -> Any:
-    from .tasks import ResultStore, run_tasks
+    from ..batch.tasks import ResultStore, run_tasks
 
     store = ResultStore(out)
     try:
@@ -177,8 +177,9 @@ def _notes(args: argparse.Namespace) -> str | None:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from . import model_info, sweep
-    from .scene import load_scene
+    from ..model import model_info
+    from ..model.scene import load_scene
+    from ..studies.sweep import analysis as sweep
 
     scene = load_scene(args.scene)
     models = _check_models(args.models, model_info.PAPER_MODELS)
@@ -260,7 +261,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 def cmd_tolerance(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
-    from . import tolerance
+    from ..studies.tolerance import study as tolerance
 
     study = tolerance.load_study(args.study)
     if args.seed is not None and args.seed < 0:

@@ -71,10 +71,10 @@ from typing import Any
 
 import numpy as np
 
-from .fmu_runner import OUTPUT_NAMES, SimulationError
-from .progress import Progress
-from .results import Trajectory
-from .scene import Scene, SceneError
+from ..model.scene import Scene, SceneError
+from ..progress import Progress
+from ..runners.fmu import OUTPUT_NAMES, SimulationError
+from ..trajectory import Trajectory
 
 ENGINES = ("fmpy", "libcosimpy")
 ORDERINGS = ("jacobi", "gauss-seidel")
@@ -257,7 +257,7 @@ def _description(path: str) -> Any:
 
 
 def _paths() -> tuple[str, str]:
-    from ._paths import combdrive_fmu_path, fmu_path
+    from ..paths import combdrive_fmu_path, fmu_path
 
     return str(fmu_path()), str(combdrive_fmu_path())
 
@@ -369,7 +369,7 @@ def _check_actuator(values: dict[str, Any]) -> dict[str, float | int]:
 
 def _csfh_start_values(scene: Scene) -> dict[str, Any]:
     """Parameters (preset, parts, overrides; the scene's contact law), initial state, inputs."""
-    from .fmu_runner import STATE_NAMES
+    from ..runners.fmu import STATE_NAMES
 
     values: dict[str, Any] = dict(scene.parameter_values(None))
     values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
@@ -417,7 +417,7 @@ def _trajectory(
 
 def write_csv(tr: Trajectory, path: Path) -> Path:
     """The co-simulation table as CSV, units in the header."""
-    from .results import UNITS
+    from ..trajectory import UNITS
 
     names = list(tr.table)
     units = {**UNITS, **COSIM_UNITS}

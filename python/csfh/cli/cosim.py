@@ -8,8 +8,8 @@ from pathlib import Path
 
 
 def _cmd_cosim(args: argparse.Namespace) -> int:
-    from .cosim import clearance, cosimulate, plot, write_csv
-    from .scene import load_scene
+    from ..cosim.run import clearance, cosimulate, plot, write_csv
+    from ..model.scene import load_scene
 
     scene = load_scene(args.scene)
     out = Path(args.out) if args.out else Path("results") / scene.name
@@ -32,7 +32,7 @@ def _cmd_cosim(args: argparse.Namespace) -> int:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    from .cosim import ENGINES
+    from ..cosim.run import ENGINES
 
     p = subparsers.add_parser(
         "cosim",

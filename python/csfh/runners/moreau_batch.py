@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from .core import CoreModel, library
+from ..model.core import CoreModel, library
+from ..model.scene import Scene
+from ..trajectory import Trajectory
 from .moreau import _IMPACT, _RECORD, _STATS, STICK_RULES, core_model, trajectory_from_buffers
-from .results import Trajectory
-from .scene import Scene
 
 _dp = POINTER(c_double)
 

@@ -11,7 +11,7 @@ from functools import cache
 
 import numpy as np
 
-from ._paths import core_library_path
+from ..paths import core_library_path
 
 ABI_VERSION = 2  # 2: csfh_api_moreau_batch (moreau_batch.py)
 _MSG = 512

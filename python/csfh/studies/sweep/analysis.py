@@ -36,9 +36,9 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
-from .results import write_json
-from .scene import Scene
-from .tasks import SIGNALS, ResultStore, Task, grid
+from ...batch.tasks import SIGNALS, ResultStore, Task, grid
+from ...model.scene import Scene
+from ...trajectory import write_json
 
 OUTPUTS = SIGNALS
 FORCES = ("F_N", "F_T")
@@ -259,7 +259,7 @@ class SweepSpec:
 
 def nominal_values(scene: Scene, names: Sequence[str]) -> dict[str, float]:
     """The scene's value of each FMU parameter (its override, the preset's, or the start)."""
-    from .moreau import core_model
+    from ...runners.moreau import core_model
 
     model = core_model(scene)
     return {n: model.get(n) for n in names}

@@ -13,7 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 if TYPE_CHECKING:
-    from .accuracy import Study
+    from .study import Study
 
 STYLE = {
     ("ME", "self"): {"color": "tab:blue", "marker": "o", "label": "ME, fmpy CVode (BDF)"},
@@ -30,7 +30,7 @@ STYLE = {
 
 
 def work_precision(study: Study, out: Path) -> list[Path]:
-    from .accuracy import METRIC_LABELS, METRICS, plotted
+    from .study import METRIC_LABELS, METRICS, plotted
 
     files = []
     for model in dict.fromkeys(p.model for p in study.points):

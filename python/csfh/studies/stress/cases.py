@@ -26,12 +26,12 @@ from typing import Any
 
 import numpy as np
 
-from .fmu_runner import SimulationError, simulate_cs, simulate_me
-from .moreau import moreau
-from .progress import Progress
-from .results import Trajectory, write_json
-from .rk4 import rk4_event
-from .scene import Scene, scene_from_dict
+from ...model.scene import Scene, scene_from_dict
+from ...progress import Progress
+from ...runners.fmu import SimulationError, simulate_cs, simulate_me
+from ...runners.moreau import moreau
+from ...runners.rk4 import rk4_event
+from ...trajectory import Trajectory, write_json
 
 M1, I1, G = 10.0, 0.1617, 9.81
 DELTA = 0.02

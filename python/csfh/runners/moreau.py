@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from .core import CoreModel, library
-from .results import Trajectory
-from .scene import Scene
+from ..model.core import CoreModel, library
+from ..model.scene import Scene
+from ..trajectory import Trajectory
 
 STICK_RULES = {"paper": 1, "memory": 2}
 MODES = {0: "free", 1: "open", 2: "stick", 3: "slip", 4: "fallback"}
@@ -68,7 +68,7 @@ def core_model(scene: Scene, parameters: dict[str, Any] | None = None) -> CoreMo
     model = CoreModel()
     values = dict(scene.parameter_values())
     if parameters:
-        from . import model_info
+        from ..model import model_info
 
         values.update({k: model_info.coerce(k, v) for k, v in parameters.items()})
     for name, value in values.items():

@@ -23,12 +23,12 @@ from fmpy import extract
 from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.model_description import ModelDescription
 
-from . import model_info
-from ._paths import fmu_path
+from ..model import model_info
+from ..model.scene import Scene
+from ..paths import fmu_path
+from ..progress import Progress
+from ..trajectory import CONTACT_FIELDS, Trajectory
 from .direct_calls import DirectCalls
-from .progress import Progress
-from .results import CONTACT_FIELDS, Trajectory
-from .scene import Scene
 
 STATE_NAMES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
 OUTPUT_NAMES = {  # table column -> FMU variable

@@ -34,8 +34,8 @@ from typing import Any
 
 import numpy as np
 
-from .progress import Progress
-from .scene import Scene
+from ..model.scene import Scene
+from ..progress import Progress
 
 SCHEMA = 2  # 2: forces of the event-driven runs as interval peaks
 SIGNALS = ("x", "y", "theta", "F_N", "F_T")
@@ -80,7 +80,7 @@ def scene_fingerprint(scene: Scene) -> dict[str, Any]:
 @cache
 def binaries_fingerprint() -> str:
     """Hash of the FMU and the core library in use: a rebuilt model invalidates old results."""
-    from ._paths import core_library_path, fmu_path
+    from ..paths import core_library_path, fmu_path
 
     h = hashlib.sha256()
     for path in (fmu_path(), core_library_path()):
@@ -141,7 +141,7 @@ def _summary(
 
 
 def _run_fmu(task: Task) -> Result:
-    from .fmu_runner import simulate_cs, simulate_me
+    from ..runners.fmu import simulate_cs, simulate_me
 
     with _FMU_LOCK:
         wall = time.perf_counter()
@@ -179,7 +179,7 @@ def _run_fmu(task: Task) -> Result:
 
 
 def _run_moreau(tasks: Sequence[Task]) -> list[Result]:
-    from .moreau_batch import moreau_batch
+    from ..runners.moreau_batch import moreau_batch
 
     first = tasks[0]
     batch = moreau_batch(

@@ -6,10 +6,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import plots
-from .results import Trajectory, write_json
-from .scene import Scene
-from .simulate import simulate
+from ..model.scene import Scene
+from ..runners.simulate import simulate
+from ..trajectory import Trajectory, write_json
+from . import paper_figures as plots
 
 
 @dataclass

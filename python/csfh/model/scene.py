@@ -220,7 +220,9 @@ def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
         raise SceneError("description must be a string")
     cosim = dict(_table("[cosim]", data.get("cosim", {})))
     if cosim:
-        from .cosim import parse_cosim  # co-simulation settings: one-line errors like the above
+        from ..cosim.run import (
+            parse_cosim,  # co-simulation settings: one-line errors like the above
+        )
 
         parse_cosim(cosim, inputs)
     scene = Scene(

@@ -41,12 +41,12 @@ from typing import Any
 
 import numpy as np
 
-from .fmu_runner import simulate_cs, simulate_me
-from .moreau import moreau
-from .progress import Progress
-from .results import Trajectory, write_json
-from .rk4 import rk4_event
-from .scene import Scene
+from ...model.scene import Scene
+from ...progress import Progress
+from ...runners.fmu import simulate_cs, simulate_me
+from ...runners.moreau import moreau
+from ...runners.rk4 import rk4_event
+from ...trajectory import Trajectory, write_json
 
 COMPLIANT = ("LN_spheres", "LN_cylinders", "LN_ESDU")
 METRICS = ("contact_time", "peak_F_N", "max_indentation", "rebound_velocity", "trajectory")
@@ -418,7 +418,7 @@ def _groups(study: Study) -> dict[tuple[str, str, str], list[Point]]:
 
 def write_report(study: Study, out: Path) -> list[Path]:
     """report.md, accuracy.json and work-precision figures in `out`."""
-    from . import plots_accuracy
+    from . import figures as plots_accuracy
 
     out.mkdir(parents=True, exist_ok=True)
     files = plots_accuracy.work_precision(study, out)
@@ -445,7 +445,7 @@ def _fmt(x: float) -> str:
 
 
 def _markdown(study: Study) -> str:
-    from . import accuracy_text
+    from . import report as accuracy_text
 
     groups = _groups(study)
     lines = [f"# Error against run time: scene `{study.scene}`", ""]

@@ -8,7 +8,7 @@ from functools import cache
 from fmpy import read_model_description
 from fmpy.model_description import ModelDescription, ModelVariable
 
-from ._paths import fmu_path
+from ..paths import fmu_path
 
 LAWS = ("LN_spheres", "LN_cylinders", "LN_ESDU", "HuntCrossley", "Flores")
 """Normal contact laws of the FMU's event-driven models (contact.law), besides `none`."""

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from . import model_info
-from .fmu_runner import simulate_cs, simulate_me
+from ..model import model_info
+from ..model.scene import Scene
+from ..progress import Progress
+from ..trajectory import Trajectory
+from .fmu import simulate_cs, simulate_me
 from .moreau import moreau
-from .progress import Progress
-from .results import Trajectory
-from .scene import Scene
 
 INTERFACES = ("me", "cs")
 

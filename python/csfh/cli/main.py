@@ -20,8 +20,8 @@ def _out_dir(args: argparse.Namespace, default: str) -> Path:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from . import model_info
-    from ._paths import core_library_path, fmu_path
+    from ..model import model_info
+    from ..paths import core_library_path, fmu_path
 
     md = model_info.model_description()
     print(f"FMU          {fmu_path()}")
@@ -34,8 +34,8 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .scene import load_scene
-    from .simulate import simulate
+    from ..model.scene import load_scene
+    from ..runners.simulate import simulate
 
     scene = load_scene(args.scene)
     out = _out_dir(args, scene.name)
@@ -55,8 +55,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from .compare import compare
-    from .scene import load_scene
+    from ..model.scene import load_scene
+    from ..studies.compare import compare
 
     scene = load_scene(args.scene)
     out = _out_dir(args, scene.name)
@@ -76,13 +76,13 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 # Further commands live in their own modules; each defines register(subparsers), whose
 # sub-parsers set `func`. Adding a command is adding its module here.
-COMMAND_MODULES: tuple[str, ...] = ("cli_accuracy", "cli_sweep", "cli_cosim")
+COMMAND_MODULES: tuple[str, ...] = ("accuracy", "sweep", "cosim")
 
 
 def build_parser() -> argparse.ArgumentParser:
     import importlib
 
-    from . import model_info
+    from ..model import model_info
 
     parser = argparse.ArgumentParser(
         prog="csfh", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -124,9 +124,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from .core import ParameterError
-    from .fmu_runner import SimulationError
-    from .scene import SceneError
+    from ..model.core import ParameterError
+    from ..model.scene import SceneError
+    from ..runners.fmu import SimulationError
 
     parser = build_parser()
     args = parser.parse_args(argv)
