@@ -49,7 +49,9 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="smaller batches (CI smoke run)")
     args = parser.parse_args()
     from csfh import load_scene
-    from csfh.batch.tasks import ResultStore, Task, default_workers, run_tasks
+    from csfh.batch.executors import default_workers, run_tasks
+    from csfh.batch.store import ResultStore
+    from csfh.batch.tasks import Task
 
     n, stop = (16, 0.25) if args.quick else (64, 1.0)
     workers = default_workers()

@@ -8,21 +8,57 @@ the Moreau time stepper, comparisons and reports on top.
     >>> scene = csfh.load_scene("csfh")
     >>> run = csfh.simulate(scene, "LN_cylinders")      # FMU, model exchange, CVode
     >>> rigid = csfh.moreau(scene, stick_rule="memory")  # Moreau midpoint stepper
+
+The package, by role (each layer imports only the ones below it):
+
+* ``csfh.cli``: the command line;
+* ``csfh.studies``: the paper's comparison, accuracy, stress, sweep and tolerance studies, each
+  with its report;
+* ``csfh.cosim``: co-simulation of the hinge with the comb-drive actuator;
+* ``csfh.batch``: many runs of one scene (tasks, result store, executors);
+* ``csfh.runners``: one run of one model (the FMU, Moreau, RK4) -> a `Trajectory`;
+* ``csfh.model``: what the model is (the FMUs' interfaces, presets, scenes, the C core);
+* foundation: ``paths`` (where the binaries are), ``errors``, ``trajectory``, ``output`` (every
+  file written), ``progress``, ``plotting``.
+
+The names below are imported on first use, so that ``import csfh`` (and ``csfh --help``) stays
+fast.
 """
 
 from __future__ import annotations
 
-from .model.scene import Scene, SceneError, load_scene, scene_from_dict
-from .paths import core_library_path, fmu_path
-from .runners.moreau import moreau
-from .runners.simulate import simulate
-from .studies.compare import compare
-from .trajectory import Trajectory
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from ._version import __version__
+
+if TYPE_CHECKING:
+    from .errors import SceneError
+    from .model.scene import Scene, load_scene, scene_from_dict
+    from .paths import core_library_path, fmu_path
+    from .runners.moreau import moreau
+    from .runners.simulate import simulate
+    from .studies.compare import compare
+    from .trajectory import Trajectory
+
+_PUBLIC = {
+    "Scene": "csfh.model.scene",
+    "SceneError": "csfh.errors",
+    "Trajectory": "csfh.trajectory",
+    "compare": "csfh.studies.compare",
+    "core_library_path": "csfh.paths",
+    "fmu_path": "csfh.paths",
+    "load_scene": "csfh.model.scene",
+    "moreau": "csfh.runners.moreau",
+    "scene_from_dict": "csfh.model.scene",
+    "simulate": "csfh.runners.simulate",
+}
 
 __all__ = [
     "Scene",
     "SceneError",
     "Trajectory",
+    "__version__",
     "compare",
     "core_library_path",
     "fmu_path",
@@ -31,4 +67,16 @@ __all__ = [
     "scene_from_dict",
     "simulate",
 ]
-__version__ = "0.1.0"
+
+
+def __getattr__(name: str) -> Any:
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'csfh' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # next time without __getattr__
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

@@ -1,14 +1,15 @@
 """The result of one simulation: an output table, optional per-step records, contact onsets and
-statistics, with CSV/JSON writers."""
+statistics, and its CSV table."""
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from .output import read_table, write_table
 
 COLUMNS = ("t", "x", "y", "theta", "vx", "vy", "omega", "F_N", "F_T", "indentation", "v_T")
 """Columns of every output table (SI units: s, m, m, rad, m/s, m/s, rad/s, N, N, m, m/s)."""
@@ -90,13 +91,22 @@ class Trajectory:
             out[key] = self.stats.get(key)
         return out
 
-    def write_csv(self, path: Path) -> None:
+    def write_csv(self, path: Path) -> Path:
+        """The output table as CSV: the standard columns first, units in the header."""
         names = [c for c in (*COLUMNS, *EXTRA_COLUMNS) if c in self.table]
         names += [c for c in self.table if c not in names]
-        header = ",".join(f"{n} [{UNITS.get(n, '-')}]" for n in names)
-        data = np.column_stack([self.table[n] for n in names])
-        np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.10g")
+        return write_table(path, {n: self.table[n] for n in names}, UNITS)
 
-
-def write_json(path: Path, data: Any) -> None:
-    path.write_text(json.dumps(data, indent=2, sort_keys=False) + "\n", encoding="utf-8")
+    @classmethod
+    def read_csv(cls, path: Path, model: str | None = None, scene: str = "") -> Trajectory:
+        """A Trajectory with the table that `write_csv` wrote (model: default the file's stem).
+        Only the table is in the file: per-step records and contact lists are not."""
+        table, _ = read_table(path)
+        if "t" not in table:
+            raise ValueError(f"{path}: no time column 't'")
+        return cls(
+            model=Path(path).stem if model is None else model,
+            scene=scene,
+            table=table,
+            contacts=np.zeros(0),
+        )

@@ -12,7 +12,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from csfh.cosim.run import CosimError, cosimulate
+from csfh.cosim.coupling import CosimError
+from csfh.cosim.run import cosimulate
 from csfh.model.scene import SceneError, load_scene, scene_from_dict
 
 

@@ -13,9 +13,10 @@ import numpy as np
 import pytest
 
 from csfh.model.core import CoreModel
+from csfh.model.instance import core_model
 from csfh.model.scene import SceneError, load_scene, scene_from_dict
 from csfh.runners.fmu import simulate_me
-from csfh.runners.moreau import core_model, moreau
+from csfh.runners.moreau import moreau
 
 G = 9.81
 CR = 0.9

@@ -8,6 +8,7 @@ from pathlib import Path
 
 def _cmd_accuracy(args: argparse.Namespace) -> int:
     from ..model.scene import load_scene
+    from ..studies.accuracy.report import write_report
     from ..studies.accuracy.study import DEFAULT_SETTINGS, QUICK_SETTINGS, run_study
 
     scene = load_scene(args.scene)
@@ -17,14 +18,14 @@ def _cmd_accuracy(args: argparse.Namespace) -> int:
     if args.repeats < 1:
         raise ValueError(f"--repeats = {args.repeats} must be >= 1")
     settings = QUICK_SETTINGS if args.quick else DEFAULT_SETTINGS
-    run_study(
+    study = run_study(
         scene,
-        out,
         stop_time=args.stop_time,
         settings=settings,
         repeats=args.repeats,
         quiet=args.quiet,
     )
+    write_report(study, out)
     print(f"wrote {out / 'report.md'}")
     return 0
 
@@ -44,12 +45,16 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_stress(args: argparse.Namespace) -> int:
-    from ..studies.stress.cases import run_suite
+    from ..studies.stress.cases import select_cases
+    from ..studies.stress.report import write_report
+    from ..studies.stress.suite import run_suite
 
     out = Path(args.out) if args.out else Path("results") / "stress"
-    runs = run_suite(out, quick=args.quick, quiet=args.quiet, only=args.only)
-    if not runs:
+    cases = select_cases(quick=args.quick, only=args.only)
+    if not cases:
         raise ValueError(f"--only = {args.only!r} matches no case")
+    runs = run_suite(cases, quiet=args.quiet)
+    write_report(cases, runs, out)
     counts = {v: sum(r.verdict == v for r in runs) for v in ("pass", "limit", "fail")}
     print(
         f"{len(runs)} runs: {counts['pass']} pass, {counts['limit']} documented limits, "

@@ -8,7 +8,10 @@ from pathlib import Path
 
 
 def _cmd_cosim(args: argparse.Namespace) -> int:
-    from ..cosim.run import clearance, cosimulate, plot, write_csv
+    from ..cosim.coupling import write_csv
+    from ..cosim.figure import plot
+    from ..cosim.run import cosimulate
+    from ..model.instance import clearance
     from ..model.scene import load_scene
 
     scene = load_scene(args.scene)
@@ -32,7 +35,7 @@ def _cmd_cosim(args: argparse.Namespace) -> int:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    from ..cosim.run import ENGINES
+    from ..model.cosim_section import ENGINES
 
     p = subparsers.add_parser(
         "cosim",

@@ -137,7 +137,8 @@ def _interface_text(interface: str, rtol: float) -> str:
 
 
 def _run(tasks: list[Any], out: Path, args: argparse.Namespace, label: str) -> Any:
-    from ..batch.tasks import ResultStore, run_tasks
+    from ..batch.executors import run_tasks
+    from ..batch.store import ResultStore
 
     store = ResultStore(out)
     try:
@@ -179,25 +180,31 @@ def _notes(args: argparse.Namespace) -> str | None:
 def cmd_sweep(args: argparse.Namespace) -> int:
     from ..model import model_info
     from ..model.scene import load_scene
-    from ..studies.sweep import analysis as sweep
+    from ..studies.sweep import analysis, parameters, spec
+    from ..studies.sweep.figures import plot_departure, plot_examples, plot_levels
+    from ..studies.sweep.report import write_json_report, write_markdown
 
     scene = load_scene(args.scene)
     models = _check_models(args.models, model_info.PAPER_MODELS)
     if args.params:
-        keys = [k for p in args.params for k in (sweep.ALL_PARAMETERS if p == "all" else [p])]
+        keys = [k for p in args.params for k in (parameters.ALL_PARAMETERS if p == "all" else [p])]
         for k in keys:
-            if k not in sweep.ALL_PARAMETERS:
+            if k not in parameters.ALL_PARAMETERS:
                 raise CliError(
-                    f"unknown parameter {k!r} (known: {', '.join(sweep.ALL_PARAMETERS)}, all)"
+                    f"unknown parameter {k!r} (known: {', '.join(parameters.ALL_PARAMETERS)}, all)"
                 )
         params = tuple(dict.fromkeys(keys))
     else:
-        params = sweep.QUICK_PARAMETERS if args.quick else tuple(p.key for p in sweep.PARAMETERS)
+        params = (
+            parameters.QUICK_PARAMETERS
+            if args.quick
+            else tuple(p.key for p in parameters.PARAMETERS)
+        )
     stop_time = args.stop_time or (0.2 if args.quick else scene.stop_time)
     dt = scene.integrator.output_interval
     if stop_time / dt < 10:
         raise CliError(f"horizon {stop_time:g} s is shorter than 10 output intervals ({dt:g} s)")
-    spec = sweep.SweepSpec(
+    sweep_spec = spec.SweepSpec(
         scene=scene,
         models=models,
         parameters=params,
@@ -207,11 +214,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     )
     notes = _notes(args)
     out = Path(args.out) if args.out else Path("results") / "sweep" / scene.name
-    tasks = sweep.sweep_tasks(spec)
+    tasks = spec.sweep_tasks(sweep_spec)
     wall = time.perf_counter()
     store, report = _run(tasks, out, args, f"sweep {scene.name}")
-    settings = sweep.MeasureSettings()
-    result = sweep.analyse(spec, tasks, store, settings)
+    settings = analysis.MeasureSettings()
+    result = analysis.analyse(sweep_spec, tasks, store, settings)
     n_moreau = sum(t.model == "Moreau" for t in tasks)
     run_info = {
         "scene": scene.name,
@@ -234,16 +241,16 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         "notes": notes,
     }
     figures = [
-        sweep.plot_levels(out / "sweep_levels.png", result),
-        sweep.plot_departure(out / "sweep_departure.png", result),
+        plot_levels(out / "sweep_levels.png", result),
+        plot_departure(out / "sweep_departure.png", result),
     ]
-    example = sweep.plot_examples(out / "sweep_examples.png", spec, tasks, store, result)
+    example = plot_examples(out / "sweep_examples.png", sweep_spec, tasks, store, result)
     if example is not None:
         figures.append(example)
-    sweep.write_json_report(
+    write_json_report(
         out / "sweep.json", result, {k: v for k, v in run_info.items() if k != "notes"}
     )
-    sweep.write_markdown(out / "sweep.md", result, run_info, figures)
+    write_markdown(out / "sweep.md", result, run_info, figures)
     if not args.quiet:
         for group, c in result["comparison"].items():
             print(
@@ -262,6 +269,7 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from ..studies.tolerance import study as tolerance
+    from ..studies.tolerance.report import plot_histograms, write_json_report, write_markdown
 
     study = tolerance.load_study(args.study)
     if args.seed is not None and args.seed < 0:
@@ -300,9 +308,9 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         "wall_time": time.perf_counter() - wall,
         "run_time_sum": _run_time_sum(tasks, store),
     }
-    fig = tolerance.plot_histograms(out / "tolerance_histograms.png", study, result)
-    tolerance.write_json_report(out / "tolerance.json", study, result, run_info)
-    tolerance.write_markdown(out / "tolerance.md", study, result, {**run_info, "notes": notes}, fig)
+    fig = plot_histograms(out / "tolerance_histograms.png", study, result)
+    write_json_report(out / "tolerance.json", study, result, run_info)
+    write_markdown(out / "tolerance.md", study, result, {**run_info, "notes": notes}, fig)
     if not args.quiet:
         for model, r in result["models"].items():
             st = r["stats"]

@@ -11,6 +11,7 @@ from functools import cache
 
 import numpy as np
 
+from ..errors import ParameterError
 from ..paths import core_library_path
 
 ABI_VERSION = 2  # 2: csfh_api_moreau_batch (moreau_batch.py)
@@ -18,10 +19,6 @@ _MSG = 512
 _dp = POINTER(c_double)
 
 TYPE_REAL, TYPE_INTEGER, TYPE_BOOLEAN, TYPE_ENUMERATION = range(4)
-
-
-class ParameterError(ValueError):
-    """A parameter value the model rejects; the message names the variable and the value."""
 
 
 @cache

@@ -31,7 +31,7 @@ the model are on, parameter overrides, constant inputs and integrator settings.
     models = ["LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau"]   # for `csfh compare`
 
     [cosim]                     # co-simulation with the comb-drive actuator (`csfh cosim`);
-                                # keys in the docstring of csfh.cosim, ignored by the other commands
+                                # keys in csfh.model.cosim_section, ignored by the other commands
 """
 
 from __future__ import annotations
@@ -43,15 +43,13 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from ..errors import SceneError
 from . import model_info
+from .cosim_section import parse_cosim
 from .presets import PRESETS
 
 BUILTIN_SCENES = ("central", "asymmetric", "csfh", "combdrive")  # combdrive: `csfh cosim`
 STICK_RULES = ("paper", "memory")
-
-
-class SceneError(ValueError):
-    """A scene file that cannot be used; the message says which key and why."""
 
 
 @dataclass(frozen=True)
@@ -79,7 +77,7 @@ class Scene:
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
     models: tuple[str, ...] = model_info.PAPER_MODELS
     source: str = ""
-    cosim: dict[str, Any] = field(default_factory=dict)  # [cosim], validated by csfh.cosim
+    cosim: dict[str, Any] = field(default_factory=dict)  # [cosim], see csfh.model.cosim_section
 
     @property
     def x0(self) -> list[float]:
@@ -220,11 +218,7 @@ def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
         raise SceneError("description must be a string")
     cosim = dict(_table("[cosim]", data.get("cosim", {})))
     if cosim:
-        from ..cosim.run import (
-            parse_cosim,  # co-simulation settings: one-line errors like the above
-        )
-
-        parse_cosim(cosim, inputs)
+        parse_cosim(cosim, inputs)  # co-simulation settings: one-line errors like the above
     scene = Scene(
         name=name,
         description=description,

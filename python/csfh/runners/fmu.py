@@ -23,6 +23,7 @@ from fmpy import extract
 from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.model_description import ModelDescription
 
+from ..errors import SimulationError
 from ..model import model_info
 from ..model.scene import Scene
 from ..paths import fmu_path
@@ -45,10 +46,6 @@ OUTPUT_NAMES = {  # table column -> FMU variable
     "gap": "contact.gap",
     "energy": "energy.total",
 }
-
-
-class SimulationError(RuntimeError):
-    """The integration failed; the message says where and why."""
 
 
 @cache

@@ -10,12 +10,14 @@ from __future__ import annotations
 import ctypes
 import math
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..model.core import CoreModel, library
-from ..model.scene import Scene
+from ..model.core import library
+from ..model.instance import core_model
+from ..model.scene import Scene, load_scene
 from ..trajectory import Trajectory
 
 STICK_RULES = {"paper": 1, "memory": 2}
@@ -63,25 +65,8 @@ _STATS = (
 )
 
 
-def core_model(scene: Scene, parameters: dict[str, Any] | None = None) -> CoreModel:
-    """A C model set up with the scene's parameters, inputs and initial state."""
-    model = CoreModel()
-    values = dict(scene.parameter_values())
-    if parameters:
-        from ..model import model_info
-
-        values.update({k: model_info.coerce(k, v) for k, v in parameters.items()})
-    for name, value in values.items():
-        model.set(name, value)
-    for name, value in scene.inputs.items():
-        model.set(name, value)
-    model.state = np.array(scene.x0)
-    model.prepare()
-    return model
-
-
 def moreau(
-    scene: Scene,
+    scene: Scene | str | Path,
     *,
     h: float | None = None,
     stick_rule: str | None = None,
@@ -95,7 +80,10 @@ def moreau(
     """Run the Moreau stepper on a scene. The output table has one row per output interval
     (decimated: memory stays bounded); F_N and F_T there are the largest per-step Lambda/h of the
     interval (the impulsive "force", which scales as 1/h); Lambda_N and Lambda_T the impulse sums.
-    Every contact onset is listed in `impacts`."""
+    Every contact onset is listed in `impacts`. `scene`: a Scene, a built-in scene's name or the
+    path of a scene file."""
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
     h = scene.integrator.moreau_h if h is None else h
     rule = scene.stick_rule if stick_rule is None else stick_rule
     if rule not in STICK_RULES:

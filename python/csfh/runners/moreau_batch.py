@@ -19,9 +19,10 @@ from typing import Any
 import numpy as np
 
 from ..model.core import CoreModel, library
+from ..model.instance import core_model
 from ..model.scene import Scene
 from ..trajectory import Trajectory
-from .moreau import _IMPACT, _RECORD, _STATS, STICK_RULES, core_model, trajectory_from_buffers
+from .moreau import _IMPACT, _RECORD, _STATS, STICK_RULES, trajectory_from_buffers
 
 _dp = POINTER(c_double)
 

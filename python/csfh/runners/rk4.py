@@ -13,9 +13,9 @@ from typing import Any
 import numpy as np
 
 from ..model.core import library
+from ..model.instance import core_model
 from ..model.scene import Scene
 from ..trajectory import CONTACT_FIELDS, Trajectory
-from .moreau import core_model
 
 _RECORD = (
     "t",

@@ -1,34 +1,51 @@
-"""Figures equivalent to the paper's (Figs. 6-12), from Trajectory objects."""
+"""Figures equivalent to the paper's (Figs. 6-12), from Trajectory objects. Each function draws
+one figure and returns it; `write_figures` writes all of them (`csfh compare`, `csfh plot`).
+Legends name the models as the command line does (LN_spheres, LN_cylinders, LN_ESDU, Moreau)."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 
+from ..plotting import model_style, save, subplots
 from ..trajectory import Trajectory
 
-STYLE = {
-    "LN_spheres": {"color": "tab:blue", "label": "LNA (K spheres)"},
-    "LN_cylinders": {"color": "tab:orange", "label": "LNA (K cylinders)"},
-    "LN_ESDU": {"color": "tab:green", "label": "LNA-ESDU"},
-    "HuntCrossley": {"color": "tab:purple", "label": "Hunt-Crossley"},
-    "Flores": {"color": "tab:brown", "label": "Flores"},
-    "Moreau": {"color": "tab:red", "label": "Moreau"},
-}
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+FIGURES = (
+    "time_histories.png",
+    "y_and_normal_force.png",
+    "first_contact.png",
+    "friction_vs_step.png",
+    "trajectory.png",
+)
+"""The files `write_figures` writes, in its order."""
+
+
+def write_figures(runs: Sequence[Trajectory], out: Path, title: str, delta: float) -> list[Path]:
+    """The five figures of a comparison into `out` (names in FIGURES); `delta` is the radial
+    clearance R2 - R1 in m."""
+    figures = (
+        time_histories(runs, title),
+        central_impact(runs, title, delta),
+        first_contact(runs, title),
+        friction_steps(runs, title),
+        trajectory(runs, title, delta),
+    )
+    return [save(fig, out / name, dpi=130) for fig, name in zip(figures, FIGURES, strict=True)]
 
 
 def _style(tr: Trajectory) -> dict[str, str]:
-    return STYLE.get(tr.model, {"color": "k", "label": tr.model})
+    return model_style(tr.model)
 
 
-def _finish(fig: plt.Figure, path: Path, handles_from: plt.Axes | None = None) -> Path:
-    """One legend for the whole figure, below the axes; save and close."""
+def _finish(fig: Figure, handles_from: Axes | None = None) -> Figure:
+    """One legend for the whole figure, below the axes."""
     if handles_from is not None:
         handles, labels = handles_from.get_legend_handles_labels()
         ncol = min(len(labels), 3)
@@ -41,12 +58,10 @@ def _finish(fig: plt.Figure, path: Path, handles_from: plt.Axes | None = None) -
         fig.tight_layout(rect=(0, bottom, 1, 1))
     else:
         fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
-    return path
+    return fig
 
 
-def _force_axis(ax: plt.Axes, runs: Sequence[Trajectory], column: str, ylabel: str) -> None:
+def _force_axis(ax: Axes, runs: Sequence[Trajectory], column: str, ylabel: str) -> None:
     """Contact forces: log scale when the Moreau impulse 'forces' (~1/h) sit next to the
     compliant forces, so that both are readable."""
     has_moreau = any(tr.model == "Moreau" for tr in runs) and any(
@@ -64,9 +79,9 @@ def _force_axis(ax: plt.Axes, runs: Sequence[Trajectory], column: str, ylabel: s
         ax.set_ylabel(ylabel)
 
 
-def time_histories(runs: Sequence[Trajectory], path: Path, title: str) -> Path:
+def time_histories(runs: Sequence[Trajectory], title: str) -> Figure:
     """Figs. 8 and 11: x, y, theta, F_N, F_T against time."""
-    fig, axes = plt.subplots(5, 1, figsize=(8, 11), sharex=True)
+    fig, axes = subplots(5, 1, figsize=(8, 11), sharex=True)
     for tr in runs:
         st = _style(tr)
         axes[0].plot(tr.t, tr["x"] * 1e3, lw=1, **st)
@@ -81,22 +96,24 @@ def time_histories(runs: Sequence[Trajectory], path: Path, title: str) -> Path:
     for ax in axes:
         ax.grid(alpha=0.3)
     axes[0].set_title(title, fontsize=10)
-    return _finish(fig, path, axes[0])
+    return _finish(fig, axes[0])
 
 
-def central_impact(runs: Sequence[Trajectory], path: Path, title: str) -> Path:
-    """Fig. 6: y(t) and F_N(t)."""
-    fig, axes = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True)
+def central_impact(runs: Sequence[Trajectory], title: str, delta: float) -> Figure:
+    """Fig. 6: y(t), with the bottom of the clearance circle y = -delta dashed, and F_N(t)."""
+    fig, axes = subplots(2, 1, figsize=(8, 6.5), sharex=True)
     for tr in runs:
         axes[0].plot(tr.t, tr["y"] * 1e3, lw=1, **_style(tr))
-    axes[0].axhline(-20.0, color="0.4", ls="--", lw=0.8)
+    axes[0].axhline(
+        -delta * 1e3, color="0.4", ls="--", lw=0.8, label=f"y = -δ = {-delta * 1e3:g} mm"
+    )
     axes[0].set_ylabel("y of G1 [mm]")
     _force_axis(axes[1], runs, "F_N", "$F_N$ [N]")
     axes[1].set_xlabel("t [s]")
     for ax in axes:
         ax.grid(alpha=0.3)
     axes[0].set_title(title, fontsize=10)
-    return _finish(fig, path, axes[0])
+    return _finish(fig, axes[0])
 
 
 def _first_contact_steps(tr: Trajectory) -> dict[str, np.ndarray] | None:
@@ -116,10 +133,10 @@ def _first_contact_steps(tr: Trajectory) -> dict[str, np.ndarray] | None:
     return {k: v[sl] for k, v in s.items()}
 
 
-def first_contact(runs: Sequence[Trajectory], path: Path, title: str) -> Path:
+def first_contact(runs: Sequence[Trajectory], title: str) -> Figure:
     """Fig. 7: indentation against step number, and the hysteresis F_N against indentation of
     the first contact (compliant models; the Moreau contact is rigid and impulsive)."""
-    fig, axes = plt.subplots(2, 1, figsize=(8, 7.5))
+    fig, axes = subplots(2, 1, figsize=(8, 7.5))
     drawn = False
     for tr in runs:
         seg = _first_contact_steps(tr)
@@ -139,13 +156,13 @@ def first_contact(runs: Sequence[Trajectory], path: Path, title: str) -> Path:
     if not drawn:
         axes[0].text(0.5, 0.5, "no compliant contact", ha="center", transform=axes[0].transAxes)
     axes[0].set_title(title, fontsize=10)
-    return _finish(fig, path, axes[0] if drawn else None)
+    return _finish(fig, axes[0] if drawn else None)
 
 
-def friction_steps(runs: Sequence[Trajectory], path: Path, title: str) -> Path:
+def friction_steps(runs: Sequence[Trajectory], title: str) -> Figure:
     """Fig. 9: v_T and F_T against the step number (event-driven models; during contacts the
     integrator takes many small steps, so most steps are spent there)."""
-    fig, axes = plt.subplots(2, 1, figsize=(8, 6.5), sharex=False)
+    fig, axes = subplots(2, 1, figsize=(8, 6.5), sharex=False)
     drawn = None
     for tr in runs:
         if not tr.steps:
@@ -161,12 +178,12 @@ def friction_steps(runs: Sequence[Trajectory], path: Path, title: str) -> Path:
         ax.set_xlabel("integrator step")
         ax.grid(alpha=0.3)
     axes[0].set_title(title, fontsize=10)
-    return _finish(fig, path, drawn)
+    return _finish(fig, drawn)
 
 
-def trajectory(runs: Sequence[Trajectory], path: Path, title: str, delta: float) -> Path:
+def trajectory(runs: Sequence[Trajectory], title: str, delta: float) -> Figure:
     """Figs. 10 and 12: the path of G1 inside the clearance circle |e| = delta."""
-    fig, ax = plt.subplots(figsize=(7, 7))
+    fig, ax = subplots(figsize=(7, 7))
     phi = np.linspace(0, 2 * np.pi, 400)
     ax.plot(
         delta * 1e3 * np.cos(phi),
@@ -185,4 +202,4 @@ def trajectory(runs: Sequence[Trajectory], path: Path, title: str, delta: float)
     ax.set_ylabel("y of G1 [mm]")
     ax.grid(alpha=0.3)
     ax.set_title(title, fontsize=10)
-    return _finish(fig, path, ax)
+    return _finish(fig, ax)

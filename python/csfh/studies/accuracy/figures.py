@@ -5,15 +5,9 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-
-if TYPE_CHECKING:
-    from .study import Study
+from ...plotting import save, subplots
+from .metrics import METRIC_LABELS, METRICS, Study, plotted
 
 STYLE = {
     ("ME", "self"): {"color": "tab:blue", "marker": "o", "label": "ME, fmpy CVode (BDF)"},
@@ -24,19 +18,17 @@ STYLE = {
         "color": "tab:purple",
         "marker": "v",
         "ls": "--",
-        "label": "Moreau vs LN K spheres",
+        "label": "Moreau vs LN_spheres",
     },
 }
 
 
 def work_precision(study: Study, out: Path) -> list[Path]:
-    from .study import METRIC_LABELS, METRICS, plotted
-
     files = []
     for model in dict.fromkeys(p.model for p in study.points):
         pts = [p for p in study.points if p.model == model]
         metrics = [m for m in METRICS if any(math.isfinite(p.errors[m]) for p in pts)]
-        fig, axes = plt.subplots(2, len(metrics), figsize=(3.6 * len(metrics), 7.2), squeeze=False)
+        fig, axes = subplots(2, len(metrics), figsize=(3.6 * len(metrics), 7.2), squeeze=False)
         for integ, vs in dict.fromkeys((p.integrator, p.vs) for p in pts):
             line = sorted(
                 (p for p in pts if (p.integrator, p.vs) == (integ, vs)),
@@ -76,8 +68,5 @@ def work_precision(study: Study, out: Path) -> list[Path]:
         )
         fig.legend(handles, labels, loc="lower center", ncol=len(labels), frameon=False)
         fig.tight_layout(rect=(0, 0.06, 1, 0.96))
-        path = out / f"wp_{model}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        files.append(path)
+        files.append(save(fig, out / f"wp_{model}.png", dpi=110))
     return files

@@ -1,15 +1,19 @@
-"""The prose of the accuracy report: definitions, and conclusions computed from the numbers."""
+"""The accuracy study's report: report.md (definitions, reference checks, figures, the table, the
+observed orders, and conclusions computed from the numbers), accuracy.json and the
+work-precision figures."""
 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from pathlib import Path
 
-if TYPE_CHECKING:
-    from .study import Point, Study
+from ...output import write_json, write_text
+from .figures import work_precision
+from .metrics import METRICS, RESOLUTION, Point, Study, grouped, observed_order, plotted
 
 
 def introduction(study: Study) -> list[str]:
+    """What was run and what each metric means."""
     return [
         f"Scene `{study.scene}`, horizon {study.stop_time:g} s. Each integrator runs each model "
         "at a range of settings; each run is compared with a reference of the same model.",
@@ -46,8 +50,7 @@ def _cheapest(points: list[Point], metric: str, target: float, cost: str) -> Poi
 
 
 def conclusions(study: Study, groups: dict[tuple[str, str, str], list[Point]]) -> list[str]:
-    from .study import observed_order
-
+    """What the numbers show, computed from them."""
     lines = ["## What the numbers show", ""]
     for model in dict.fromkeys(p.model for p in study.points):
         if model == "Moreau":
@@ -116,3 +119,105 @@ def conclusions(study: Study, groups: dict[tuple[str, str, str], list[Point]]) -
         "the event tolerance and its cost grows as the step shrinks through every contact.",
     ]
     return lines
+
+
+def write_report(study: Study, out: Path) -> list[Path]:
+    """report.md, accuracy.json and work-precision figures in `out`."""
+    out.mkdir(parents=True, exist_ok=True)
+    files = work_precision(study, out)
+    data = {
+        "scene": study.scene,
+        "stop_time": study.stop_time,
+        "references": study.references,
+        "reference_checks": study.reference_checks,
+        "points": [p.__dict__ for p in study.points],
+        "orders": {
+            f"{m}/{i}/{v}": {k: observed_order(ps, k) for k in METRICS}
+            for (m, i, v), ps in grouped(study).items()
+        },
+    }
+    write_json(out / "accuracy.json", data)
+    files.append(out / "accuracy.json")
+    write_text(out / "report.md", _markdown(study))
+    files.append(out / "report.md")
+    return files
+
+
+def _fmt(x: float) -> str:
+    return "-" if not math.isfinite(x) else f"{x:.2e}"
+
+
+def _markdown(study: Study) -> str:
+    groups = grouped(study)
+    lines = [f"# Error against run time: scene `{study.scene}`", ""]
+    lines += introduction(study)
+    lines += [
+        "",
+        "## References",
+        "",
+        "Each reference and the change of every metric when its setting is halved, against "
+        "the smallest error plotted for that model (the check passes below 1 %). Errors smaller "
+        f"than {RESOLUTION:g} times that change measure the reference rather than the "
+        "integrator: they are not plotted, not used for the orders, and shown as '< x' in the "
+        "table.",
+        "",
+        "| model | reference | metric | change on halving | smallest error plotted | ratio |",
+        "|---|---|---|---|---|---|",
+    ]
+    for model, change in study.reference_checks.items():
+        pts = [p for p in study.points if p.model == model and p.vs == "self"]
+        for metric, value in change.items():
+            smallest = min((p.errors[metric] for p in pts if plotted(p, metric)), default=math.nan)
+            ratio = value / smallest if smallest and math.isfinite(smallest) else math.nan
+            verdict = "" if not math.isfinite(ratio) else (" ok" if ratio < 0.01 else " **no**")
+            lines.append(
+                f"| {model} | {study.references[model]} | {metric} | {_fmt(value)} | "
+                f"{_fmt(smallest)} | {_fmt(ratio)}{verdict} |"
+            )
+    lines += ["", "## Figures", ""]
+    for model in dict.fromkeys(p.model for p in study.points):
+        lines.append(f"![{model}](wp_{model}.png)")
+        lines.append("")
+    lines += [
+        "## Table",
+        "",
+        "Errors as defined above; cost as median wall time of the repeats and the number of "
+        "right-hand-side evaluations (including CVODE's difference-quotient Jacobian; one per "
+        "Moreau step).",
+        "",
+        "| model | integrator | setting | vs | wall [s] | RHS | steps | contact time [s] | "
+        "peak F_N | max ind. | rebound | trajectory [m] |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for p in study.points:
+        ref = study.reference_checks.get(p.model if p.vs == "self" else p.vs, {})
+        cells = [
+            f"< {RESOLUTION * ref[m]:.1e}" if m in p.unresolved else _fmt(p.errors[m])
+            for m in METRICS
+        ]
+        lines.append(
+            f"| {p.model} | {p.integrator} | {p.label} | {p.vs} | {p.wall_time:.3g} | "
+            f"{p.rhs_evaluations} | {p.steps} | " + " | ".join(cells) + " |"
+        )
+    lines += [
+        "",
+        "## Observed order of convergence",
+        "",
+        "Least-squares slope of log(error) against log(setting): the setting is the relative "
+        "tolerance for ME and CS (1 means the error is proportional to the tolerance), the "
+        "nominal step h0 for RK4 (its event tolerance shrinks with it) and the step h for "
+        "Moreau.",
+        "",
+        "| model | integrator | vs | " + " | ".join(METRICS) + " |",
+        "|---|---|---|" + "---|" * len(METRICS),
+    ]
+    for (m, i, v), ps in groups.items():
+        orders = [observed_order(ps, k) for k in METRICS]
+        lines.append(
+            f"| {m} | {i} | {v} | "
+            + " | ".join("-" if not math.isfinite(o) else f"{o:.2f}" for o in orders)
+            + " |"
+        )
+    lines += [""]
+    lines += conclusions(study, groups)
+    return "\n".join(lines) + "\n"

@@ -35,8 +35,7 @@ import math
 import statistics
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
-from pathlib import Path
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -46,18 +45,18 @@ from ...progress import Progress
 from ...runners.fmu import simulate_cs, simulate_me
 from ...runners.moreau import moreau
 from ...runners.rk4 import rk4_event
-from ...trajectory import Trajectory, write_json
-
-COMPLIANT = ("LN_spheres", "LN_cylinders", "LN_ESDU")
-METRICS = ("contact_time", "peak_F_N", "max_indentation", "rebound_velocity", "trajectory")
-METRIC_LABELS = {
-    "contact_time": "contact time error [s]",
-    "peak_F_N": "peak $F_N$ relative error",
-    "max_indentation": "max indentation relative error",
-    "rebound_velocity": "rebound velocity relative error",
-    "trajectory": "trajectory error max|q - q_ref| [m]",
-}
-RIGID_METRICS = ("contact_time", "rebound_velocity", "trajectory")
+from ...trajectory import Trajectory
+from .metrics import (
+    COMPLIANT,
+    METRICS,
+    RIGID_METRICS,
+    Point,
+    Study,
+    contact_errors,
+    horizon,
+    mark_unresolved,
+    trajectory_error,
+)
 
 DEFAULT_SETTINGS: dict[str, list[Any]] = {
     "ME": [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
@@ -74,92 +73,6 @@ QUICK_SETTINGS: dict[str, list[Any]] = {
 REF_RTOL = 1e-13
 REF_MOREAU_H = 1e-9
 CS_COMMUNICATION_STEP = 1e-2  # s: the co-simulation runs are observed at these points
-
-
-@dataclass
-class Point:
-    """One integrator at one setting on one model."""
-
-    model: str
-    integrator: str
-    setting: float
-    label: str
-    wall_time: float
-    rhs_evaluations: int
-    steps: int
-    errors: dict[str, float]
-    vs: str = "self"  # which reference: "self" or a compliant model name (Moreau)
-    unresolved: list[str] = field(default_factory=list)  # metrics below the reference's accuracy
-
-
-@dataclass
-class Study:
-    scene: str
-    stop_time: float
-    points: list[Point] = field(default_factory=list)
-    reference_checks: dict[str, dict[str, float]] = field(default_factory=dict)
-    references: dict[str, str] = field(default_factory=dict)
-
-
-# ------------------------------------------------------------------------------------------
-# metrics
-
-
-def _onsets(tr: Trajectory, n: int = 3) -> dict[str, np.ndarray]:
-    cr = tr.contact_records
-    return {k: v[:n] for k, v in cr.items()}
-
-
-def contact_errors(tr: Trajectory, ref: Trajectory, n: int = 3) -> dict[str, float]:
-    """Errors of the first n contacts, matched by order."""
-    a, b = _onsets(tr, n), _onsets(ref, n)
-    k = min(len(a["t_onset"]), len(b["t_onset"]))
-    if k == 0:
-        return {m: math.nan for m in METRICS[:4]}
-
-    def rel(name: str) -> float:
-        x, y = a[name][:k], b[name][:k]
-        ok = np.isfinite(x) & np.isfinite(y) & (np.abs(y) > 0)
-        return float(np.max(np.abs(x[ok] - y[ok]) / np.abs(y[ok]))) if ok.any() else math.nan
-
-    return {
-        "contact_time": float(np.max(np.abs(a["t_onset"][:k] - b["t_onset"][:k]))),
-        "peak_F_N": rel("peak_F_N"),
-        "max_indentation": rel("max_indentation"),
-        "rebound_velocity": rel("release_speed"),
-    }
-
-
-def horizon(tr: Trajectory, ref: Trajectory, stop_time: float) -> float:
-    """End of the comparable horizon: the reference onset of the first contact whose timing
-    differs by more than 1 % of the preceding flight time (or the stop time)."""
-    t, t_ref = tr.contact_records["t_onset"], ref.contact_records["t_onset"]
-    previous = 0.0
-    for k in range(len(t_ref)):
-        if k >= len(t) or abs(t[k] - t_ref[k]) > 0.01 * (t_ref[k] - previous):
-            return float(t_ref[k])
-        previous = float(t_ref[k])
-    return stop_time
-
-
-def trajectory_error(tr: Trajectory, ref: Trajectory, t_max: float, radius: float) -> float:
-    """max over common output times t < t_max of max(|dx|, |dy|, radius |dtheta|)."""
-    ta, tb = tr.t, ref.t
-    idx = np.searchsorted(tb, ta)
-    idx = np.clip(idx, 0, len(tb) - 1)
-    match = (np.abs(tb[idx] - ta) <= 1e-12 * np.maximum(1.0, np.abs(ta))) & (ta < t_max)
-    # the event rows of a table are left limits at the event instants: skip repeated times
-    if not match.any():
-        return math.nan
-    ia, ib = np.nonzero(match)[0], idx[match]
-    d = np.maximum.reduce(
-        [
-            np.abs(tr["x"][ia] - ref["x"][ib]),
-            np.abs(tr["y"][ia] - ref["y"][ib]),
-            radius * np.abs(tr["theta"][ia] - ref["theta"][ib]),
-        ]
-    )
-    return float(np.max(d))
 
 
 # ------------------------------------------------------------------------------------------
@@ -184,7 +97,6 @@ def _grid(scene: Scene, stop_time: float) -> np.ndarray:
 
 def run_study(
     scene: Scene,
-    out: Path | None = None,
     *,
     stop_time: float | None = None,
     settings: dict[str, list[Any]] | None = None,
@@ -277,29 +189,8 @@ def run_study(
                 )
             step()
     progress.close()
-    _mark_unresolved(study)
-    if out is not None:
-        write_report(study, out)
+    mark_unresolved(study)
     return study
-
-
-RESOLUTION = 100.0
-"""An error is plotted only if it is at least this many times the change of its reference on
-halving the reference's setting: below that it measures the reference, not the integrator."""
-
-
-def _mark_unresolved(study: Study) -> None:
-    for p in study.points:
-        change = study.reference_checks.get(p.model if p.vs == "self" else p.vs, {})
-        p.unresolved = [
-            m for m, c in change.items() if math.isfinite(c) and p.errors[m] < RESOLUTION * c
-        ]
-
-
-def plotted(p: Point, metric: str) -> bool:
-    """The error is finite, positive and resolved by the reference."""
-    e = p.errors[metric]
-    return math.isfinite(e) and e > 0 and metric not in p.unresolved
 
 
 def default_horizon(scene: Scene) -> float:
@@ -393,130 +284,3 @@ def _point(
         errors=errors,
         vs=vs,
     )
-
-
-# ------------------------------------------------------------------------------------------
-# convergence order and the report
-
-
-def observed_order(points: list[Point], metric: str) -> float:
-    """Slope of log(error) against log(setting) (rtol, h0 or h), least squares over the points
-    with a finite, positive error."""
-    xs = [math.log(p.setting) for p in points if plotted(p, metric)]
-    ys = [math.log(p.errors[metric]) for p in points if plotted(p, metric)]
-    if len(xs) < 2:
-        return math.nan
-    return float(np.polyfit(xs, ys, 1)[0])
-
-
-def _groups(study: Study) -> dict[tuple[str, str, str], list[Point]]:
-    groups: dict[tuple[str, str, str], list[Point]] = {}
-    for p in study.points:
-        groups.setdefault((p.model, p.integrator, p.vs), []).append(p)
-    return groups
-
-
-def write_report(study: Study, out: Path) -> list[Path]:
-    """report.md, accuracy.json and work-precision figures in `out`."""
-    from . import figures as plots_accuracy
-
-    out.mkdir(parents=True, exist_ok=True)
-    files = plots_accuracy.work_precision(study, out)
-    data = {
-        "scene": study.scene,
-        "stop_time": study.stop_time,
-        "references": study.references,
-        "reference_checks": study.reference_checks,
-        "points": [p.__dict__ for p in study.points],
-        "orders": {
-            f"{m}/{i}/{v}": {k: observed_order(ps, k) for k in METRICS}
-            for (m, i, v), ps in _groups(study).items()
-        },
-    }
-    write_json(out / "accuracy.json", data)
-    files.append(out / "accuracy.json")
-    (out / "report.md").write_text(_markdown(study), encoding="utf-8")
-    files.append(out / "report.md")
-    return files
-
-
-def _fmt(x: float) -> str:
-    return "-" if not math.isfinite(x) else f"{x:.2e}"
-
-
-def _markdown(study: Study) -> str:
-    from . import report as accuracy_text
-
-    groups = _groups(study)
-    lines = [f"# Error against run time: scene `{study.scene}`", ""]
-    lines += accuracy_text.introduction(study)
-    lines += [
-        "",
-        "## References",
-        "",
-        "Each reference and the change of every metric when its setting is halved, against "
-        "the smallest error plotted for that model (the check passes below 1 %). Errors smaller "
-        f"than {RESOLUTION:g} times that change measure the reference rather than the "
-        "integrator: they are not plotted, not used for the orders, and shown as '< x' in the "
-        "table.",
-        "",
-        "| model | reference | metric | change on halving | smallest error plotted | ratio |",
-        "|---|---|---|---|---|---|",
-    ]
-    for model, change in study.reference_checks.items():
-        pts = [p for p in study.points if p.model == model and p.vs == "self"]
-        for metric, value in change.items():
-            smallest = min((p.errors[metric] for p in pts if plotted(p, metric)), default=math.nan)
-            ratio = value / smallest if smallest and math.isfinite(smallest) else math.nan
-            verdict = "" if not math.isfinite(ratio) else (" ok" if ratio < 0.01 else " **no**")
-            lines.append(
-                f"| {model} | {study.references[model]} | {metric} | {_fmt(value)} | "
-                f"{_fmt(smallest)} | {_fmt(ratio)}{verdict} |"
-            )
-    lines += ["", "## Figures", ""]
-    for model in dict.fromkeys(p.model for p in study.points):
-        lines.append(f"![{model}](wp_{model}.png)")
-        lines.append("")
-    lines += [
-        "## Table",
-        "",
-        "Errors as defined above; cost as median wall time of the repeats and the number of "
-        "right-hand-side evaluations (including CVODE's difference-quotient Jacobian; one per "
-        "Moreau step).",
-        "",
-        "| model | integrator | setting | vs | wall [s] | RHS | steps | contact time [s] | "
-        "peak F_N | max ind. | rebound | trajectory [m] |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for p in study.points:
-        ref = study.reference_checks.get(p.model if p.vs == "self" else p.vs, {})
-        cells = [
-            f"< {RESOLUTION * ref[m]:.1e}" if m in p.unresolved else _fmt(p.errors[m])
-            for m in METRICS
-        ]
-        lines.append(
-            f"| {p.model} | {p.integrator} | {p.label} | {p.vs} | {p.wall_time:.3g} | "
-            f"{p.rhs_evaluations} | {p.steps} | " + " | ".join(cells) + " |"
-        )
-    lines += [
-        "",
-        "## Observed order of convergence",
-        "",
-        "Least-squares slope of log(error) against log(setting): the setting is the relative "
-        "tolerance for ME and CS (1 means the error is proportional to the tolerance), the "
-        "nominal step h0 for RK4 (its event tolerance shrinks with it) and the step h for "
-        "Moreau.",
-        "",
-        "| model | integrator | vs | " + " | ".join(METRICS) + " |",
-        "|---|---|---|" + "---|" * len(METRICS),
-    ]
-    for (m, i, v), ps in groups.items():
-        orders = [observed_order(ps, k) for k in METRICS]
-        lines.append(
-            f"| {m} | {i} | {v} | "
-            + " | ".join("-" if not math.isfinite(o) else f"{o:.2f}" for o in orders)
-            + " |"
-        )
-    lines += [""]
-    lines += accuracy_text.conclusions(study, groups)
-    return "\n".join(lines) + "\n"
