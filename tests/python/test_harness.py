@@ -248,6 +248,41 @@ def test_builtin_scenes() -> None:
     assert full.q0 == (0.01, 0.01, 0.0) and full.flexure and full.friction
 
 
+def test_the_scene_example_in_the_documentation_is_a_valid_scene() -> None:
+    """The example scene in csfh.model.scene's docstring parses and loads as documented."""
+    import textwrap
+    import tomllib
+
+    import csfh.model.scene as scene_module
+
+    doc = str(scene_module.__doc__)
+    example = textwrap.dedent(doc[doc.index("    name = ") :])
+    data = tomllib.loads(example)
+    scene = scene_from_dict(data, "docstring")
+    assert scene.models == ("LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau")
+    assert scene.integrator.stick_rule == "paper" and scene.parameters == {"contact.cr": 0.9}
+    assert scene.q0 == (0.01, 0.01, 0.0) and scene.inputs == {"F_ext[1]": 0.0}
+
+
+@pytest.mark.parametrize("entry", ["simulate", "moreau"])
+def test_public_runners_take_a_scene_name_or_file(entry: str, tmp_path: Path) -> None:
+    """csfh.simulate / csfh.moreau accept what csfh.load_scene accepts (as the CLI does)."""
+    import csfh
+
+    by_object = csfh.simulate(load_scene("central"), "LN_ESDU", stop_time=0.1)
+    if entry == "simulate":
+        by_name = csfh.simulate("central", "LN_ESDU", stop_time=0.1)
+    else:
+        by_object = csfh.moreau(load_scene("central"), stop_time=0.1)
+        by_name = csfh.moreau("central", stop_time=0.1)
+    path = tmp_path / "mine.toml"
+    path.write_text('name = "mine"\nstop_time = 0.1\n[initial]\nq = [0.0, 0.01, 0.0]\n')
+    by_file = csfh.simulate(path, "LN_ESDU") if entry == "simulate" else csfh.moreau(str(path))
+    assert by_name.scene == "central" and by_file.scene == "mine"
+    np.testing.assert_array_equal(by_name["y"], by_object["y"])
+    assert by_file.t[-1] == pytest.approx(0.1)
+
+
 def test_consistent_preset_values() -> None:
     scene = scene_from_dict({"name": "c", "preset": "consistent"})
     model = core_model(scene)

@@ -81,7 +81,7 @@ def run_tasks(
     n_workers = default_workers() if workers is None else max(1, workers)
     chunks = make_chunks(pending, n_workers if dask_address is None else max(n_workers, 8), batch)
     by_key = {t.key: t for t in pending}
-    progress = Progress(label, quiet=quiet)
+    progress = Progress(label, quiet=quiet, total=len(pending))
     done = 0
     wall = time.perf_counter()
 
@@ -90,7 +90,7 @@ def run_tasks(
         batch = [(by_key[key], summary, sig, wall) for key, summary, sig, wall in results]
         store.add_many(batch)
         done += len(batch)
-        progress.update(done / max(1, len(pending)))
+        progress.update(done)
         if on_result is not None:
             on_result(done, len(pending))
 

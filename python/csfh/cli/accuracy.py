@@ -1,9 +1,12 @@
-"""`csfh accuracy` and `csfh stress`."""
+"""`csfh accuracy` (error against run time of every integrator) and `csfh stress` (stiff and
+extreme cases with verdicts)."""
 
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
+from typing import Any
+
+from .common import SCENE_HELP, add_command, add_quiet, out_dir, positive_float, positive_int
 
 
 def _cmd_accuracy(args: argparse.Namespace) -> int:
@@ -12,11 +15,7 @@ def _cmd_accuracy(args: argparse.Namespace) -> int:
     from ..studies.accuracy.study import DEFAULT_SETTINGS, QUICK_SETTINGS, run_study
 
     scene = load_scene(args.scene)
-    out = Path(args.out) if args.out else Path("results") / scene.name / "accuracy"
-    if args.stop_time is not None and not args.stop_time > 0:
-        raise ValueError(f"--stop-time = {args.stop_time} must be > 0")
-    if args.repeats < 1:
-        raise ValueError(f"--repeats = {args.repeats} must be >= 1")
+    out = out_dir(args, scene.name, "accuracy")
     settings = QUICK_SETTINGS if args.quick else DEFAULT_SETTINGS
     study = run_study(
         scene,
@@ -30,29 +29,56 @@ def _cmd_accuracy(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("accuracy", help="error against run time of every integrator (report.md)")
-    p.add_argument("scene", help="built-in scene or a .toml file")
-    p.add_argument("--out", help="output directory (default results/SCENE/accuracy)")
-    p.add_argument(
-        "--stop-time", type=float, help="horizon, s (default: through the third contact + 20 %%)"
+def register(sub: Any) -> None:
+    p = add_command(
+        sub,
+        "accuracy",
+        help="error against run time of every integrator (report.md)",
+        description="Run every integrator (model exchange and co-simulation with CVODE at "
+        "rtol 1e-3 ... 1e-10, the paper's RK4 + bisection, Moreau at h = 1e-3 ... 1e-6 s) on "
+        "every model of a scene, measure the contact-time, peak, indentation, rebound and "
+        "trajectory errors over the first three contacts against a tighter reference, and "
+        "write report.md, accuracy.json and work-precision figures.",
     )
-    p.add_argument("--repeats", type=int, default=3, help="timing repeats (median), default 3")
+    p.add_argument("scene", help=SCENE_HELP)
+    p.add_argument("--out", help="output directory (default: results/SCENE/accuracy)")
+    p.add_argument(
+        "--stop-time",
+        type=positive_float,
+        metavar="T",
+        help="horizon in s (default: through the third contact + 20 %%)",
+    )
+    p.add_argument(
+        "--repeats", type=positive_int, default=3, help="timing repeats (median of them)"
+    )
     p.add_argument("--quick", action="store_true", help="fewer settings (a smoke run)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet(p)
     p.set_defaults(func=_cmd_accuracy)
     register_stress(sub)
 
 
 def _cmd_stress(args: argparse.Namespace) -> int:
     from ..studies.stress.cases import select_cases
+
+    cases = select_cases(quick=args.quick, only=args.only)
+    if not cases:
+        raise ValueError(f"--only = {args.only!r} matches no case (csfh stress --list)")
+    if args.list:
+        width = max(len(c.group) for c in cases)
+        for c in cases:
+            by_model: dict[str, list[str]] = {}
+            for model, integ in c.runs:
+                by_model.setdefault(model, []).append(integ)
+            runs = ", ".join(
+                m if integs == [m] else f"{m} {'/'.join(integs)}" for m, integs in by_model.items()
+            )
+            quick = "quick" if c.quick else "     "
+            print(f"{c.group:<{width}}  {quick}  {c.name}: {runs}")
+        return 0
     from ..studies.stress.report import write_report
     from ..studies.stress.suite import run_suite
 
-    out = Path(args.out) if args.out else Path("results") / "stress"
-    cases = select_cases(quick=args.quick, only=args.only)
-    if not cases:
-        raise ValueError(f"--only = {args.only!r} matches no case")
+    out = out_dir(args, "stress")
     runs = run_suite(cases, quiet=args.quiet)
     write_report(cases, runs, out)
     counts = {v: sum(r.verdict == v for r in runs) for v in ("pass", "limit", "fail")}
@@ -63,10 +89,27 @@ def _cmd_stress(args: argparse.Namespace) -> int:
     return 1 if counts["fail"] else 0
 
 
-def register_stress(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("stress", help="stiff and extreme cases with verdicts (stress.md)")
-    p.add_argument("--out", help="output directory (default results/stress)")
+def register_stress(sub: Any) -> None:
+    p = add_command(
+        sub,
+        "stress",
+        help="stiff and extreme cases with verdicts (stress.md)",
+        description="Run the stiff and extreme cases (contact stiffness, impact speed, "
+        "restitution, clearance, grazing, resting contact, friction, eccentric mass) with "
+        "every applicable model and integrator, give each run a verdict (pass, documented "
+        "limit, fail) and write stress.md and stress.json. Exit status 1 if any run fails. "
+        "`--list` shows the cases (group, whether the quick suite has it, name, runs).",
+    )
+    p.add_argument("--out", help="output directory (default: results/stress)")
     p.add_argument("--quick", action="store_true", help="the reduced suite (as in CI)")
-    p.add_argument("--only", help="run only the cases whose name contains this (or a group)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--only",
+        metavar="TEXT",
+        help="only the cases whose name contains TEXT, or whose group is TEXT (see --list; "
+        "default: all)",
+    )
+    p.add_argument(
+        "--list", action="store_true", help="list the cases (after --quick, --only) and exit"
+    )
+    add_quiet(p)
     p.set_defaults(func=_cmd_stress)

@@ -4,7 +4,9 @@ section (fmpy master loop or libcosimpy) and write a CSV and a figure."""
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
+from typing import Any
+
+from .common import add_command, add_quiet, out_dir, positive_float
 
 
 def _cmd_cosim(args: argparse.Namespace) -> int:
@@ -15,7 +17,7 @@ def _cmd_cosim(args: argparse.Namespace) -> int:
     from ..model.scene import load_scene
 
     scene = load_scene(args.scene)
-    out = Path(args.out) if args.out else Path("results") / scene.name
+    out = out_dir(args, scene.name)
     out.mkdir(parents=True, exist_ok=True)
     tr = cosimulate(
         scene, engine=args.engine, step=args.step, stop_time=args.stop_time, quiet=args.quiet
@@ -34,15 +36,16 @@ def _cmd_cosim(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:
+def register(sub: Any) -> None:
     from ..model.cosim_section import ENGINES
 
-    p = subparsers.add_parser(
+    p = add_command(
+        sub,
         "cosim",
         help="co-simulate the hinge with the comb-drive actuator ([cosim] section of a scene)",
         description="Co-simulation of the csfh FMU with the comb-drive actuator FMU: the "
         "coupling, voltage ramp and step come from the scene's [cosim] section (built-in "
-        "example: combdrive). Writes cosim_ENGINE.csv and cosim_ENGINE.png.",
+        "example: combdrive). Writes OUT/cosim_ENGINE.csv and OUT/cosim_ENGINE.png.",
     )
     p.add_argument("scene", help="built-in scene (combdrive) or a .toml file with [cosim]")
     p.add_argument(
@@ -50,8 +53,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         choices=ENGINES,
         help="master: fmpy loop or libcosimpy (default: the scene's, else fmpy)",
     )
-    p.add_argument("--out", help="output directory (default results/SCENE)")
-    p.add_argument("--step", type=float, help="communication step [s] (default: the scene's)")
-    p.add_argument("--stop-time", type=float, help="end time [s] (default: the scene's)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--out", help="output directory (default: results/SCENE)")
+    p.add_argument(
+        "--step",
+        type=positive_float,
+        metavar="H",
+        help="communication step in s (default: the scene's)",
+    )
+    p.add_argument(
+        "--stop-time",
+        type=positive_float,
+        metavar="T",
+        help="end time in s (default: the scene's)",
+    )
+    add_quiet(p)
     p.set_defaults(func=_cmd_cosim)

@@ -11,65 +11,51 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .main import CliError
+from .common import CliError, add_command, add_quiet, positive_float, positive_int
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} must be >= 1")
-    return value
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not value > 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"{text!r} must be a finite number > 0")
-    return value
-
-
-def _execution_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--out", help="output directory (results are kept there and reused)")
+def _execution_options(p: argparse.ArgumentParser, command: str) -> None:
+    p.add_argument(
+        "--out",
+        help="output directory, where finished runs are kept and reused (default: "
+        f"results/{command}/SCENE)",
+    )
     p.add_argument(
         "--workers",
-        type=_positive_int,
+        type=positive_int,
         metavar="N",
         help="local processes (default: all cores; 1 = serial in this process)",
     )
     p.add_argument(
         "--dask",
         metavar="ADDRESS",
-        help="run on an existing Dask distributed scheduler, e.g. tcp://host:8786",
+        help="run on an existing Dask distributed scheduler, e.g. tcp://host:8786 (default: "
+        "local processes, see --workers)",
     )
     p.add_argument(
         "--interface",
         choices=("me", "cs"),
         default="me",
-        help="FMU interface of the event-driven models (default me: model exchange "
-        "with fmpy's CVode, events located exactly)",
+        help="FMU interface of the event-driven models: me = model exchange with fmpy's "
+        "CVode, events located exactly; cs = co-simulation, CVODE inside the FMU",
     )
     p.add_argument(
         "--stop-time",
-        type=_positive_float,
+        type=positive_float,
         metavar="T",
         help="horizon in s (default: the scene's stop_time)",
     )
     p.add_argument(
         "--notes",
         metavar="FILE",
-        help="markdown appended to the report (e.g. a hand-written discussion)",
+        help="markdown appended to the report, e.g. a hand-written discussion (default: none)",
     )
-    p.add_argument("--quiet", action="store_true", help="no progress bar, less output")
+    add_quiet(p)
 
 
 def register(sub: Any) -> None:
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "sweep",
         help="parametric analysis of the paper's Tables 4 and 5, quantitative",
         description="Move each parameter of the paper's Tables 4 and 5 by its step in both "
@@ -77,13 +63,13 @@ def register(sub: Any) -> None:
         "nominal run, and write sweep.md, sweep.json and heat maps.",
     )
     p.add_argument(
-        "scene", nargs="?", default="csfh", help="built-in scene or .toml file (default csfh)"
+        "scene", nargs="?", default="csfh", help="built-in scene or .toml file (default: csfh)"
     )
     p.add_argument(
         "--models",
         nargs="+",
         metavar="MODEL",
-        help="models (default LN_spheres LN_cylinders LN_ESDU Moreau)",
+        help="models (default: LN_spheres LN_cylinders LN_ESDU Moreau)",
     )
     p.add_argument(
         "--params",
@@ -97,10 +83,11 @@ def register(sub: Any) -> None:
         action="store_true",
         help="reduced sweep: R1, m1, h over 0.2 s (unless --params/--stop-time)",
     )
-    _execution_options(p)
+    _execution_options(p, "sweep")
     p.set_defaults(func=cmd_sweep)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "tolerance",
         help="Monte Carlo over manufacturing tolerances",
         description="Sample the [tolerance] table of a tolerance file, run every model for each "
@@ -112,10 +99,26 @@ def register(sub: Any) -> None:
         help="tolerance file (.toml with [tolerance]), tolerance_csfh, or a built-in "
         "scene (then with the tolerances of tolerance_csfh)",
     )
-    p.add_argument("--runs", type=_positive_int, metavar="N", help="runs per model")
-    p.add_argument("--seed", type=int, metavar="S", help="random seed (>= 0)")
-    p.add_argument("--models", nargs="+", metavar="MODEL", help="models")
-    _execution_options(p)
+    p.add_argument(
+        "--runs",
+        type=positive_int,
+        metavar="N",
+        help="runs per model (default: the file's [montecarlo] runs, else 200)",
+    )
+    p.add_argument(
+        "--seed",
+        type=int,
+        metavar="S",
+        help="random seed >= 0 (default: the file's [montecarlo] seed, else 1)",
+    )
+    p.add_argument(
+        "--models",
+        nargs="+",
+        metavar="MODEL",
+        help="models (default: the file's [montecarlo] models, else LN_spheres LN_cylinders "
+        "LN_ESDU Moreau)",
+    )
+    _execution_options(p, "tolerance")
     p.set_defaults(func=cmd_tolerance)
 
 

@@ -11,9 +11,14 @@ from ..paths import combdrive_fmu_path
 from .fmus import Slave, description
 
 
+def actuator_description() -> Any:
+    """The comb-drive FMU's model description (fmpy's ModelDescription)."""
+    return description(str(combdrive_fmu_path()))
+
+
 def actuator_parameters() -> dict[str, Any]:
     """The comb-drive FMU's parameters (name -> ModelVariable)."""
-    md = description(str(combdrive_fmu_path()))
+    md = actuator_description()
     return {v.name: v for v in md.modelVariables if v.causality == "parameter"}
 
 

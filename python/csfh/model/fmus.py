@@ -4,10 +4,6 @@ validation and the co-simulation masters use it)."""
 
 from __future__ import annotations
 
-import atexit
-import shutil
-import tempfile
-from ctypes import byref
 from functools import cache
 from typing import Any
 
@@ -15,6 +11,10 @@ from typing import Any
 @cache
 def unzipped(path: str) -> str:
     """The FMU unpacked into a temporary directory (removed when the process exits)."""
+    import atexit
+    import shutil
+    import tempfile
+
     from fmpy import extract
 
     directory = tempfile.mkdtemp(prefix="csfh-cosim-")
@@ -34,6 +34,8 @@ class _Log:
     """FMI logger callbacks that keep the messages (for error reports)."""
 
     def __init__(self) -> None:
+        from ctypes import byref
+
         from fmpy import calloc, free
         from fmpy.fmi2 import (
             fmi2CallbackAllocateMemoryTYPE,

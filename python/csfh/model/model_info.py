@@ -4,11 +4,12 @@ which is generated from the same table as the C code)."""
 from __future__ import annotations
 
 from functools import cache
-
-from fmpy import read_model_description
-from fmpy.model_description import ModelDescription, ModelVariable
+from typing import TYPE_CHECKING
 
 from ..paths import fmu_path
+
+if TYPE_CHECKING:
+    from fmpy.model_description import ModelDescription, ModelVariable
 
 LAWS = ("LN_spheres", "LN_cylinders", "LN_ESDU", "HuntCrossley", "Flores")
 """Normal contact laws of the FMU's event-driven models (contact.law), besides `none`."""
@@ -20,6 +21,8 @@ PAPER_MODELS = ("LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau")
 
 @cache
 def model_description() -> ModelDescription:
+    from fmpy import read_model_description  # here, not at import: `csfh --help` stays fast
+
     return read_model_description(str(fmu_path()))
 
 

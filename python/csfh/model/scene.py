@@ -5,6 +5,7 @@ the model are on, parameter overrides, constant inputs and integrator settings.
     description = "..."
     preset = "paper"            # or "consistent" (PHYSICS.md section 9)
     stop_time = 1.0             # s
+    models = ["LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau"]   # for `csfh compare`
 
     [initial]
     q = [0.01, 0.01, 0.0]       # x [m], y [m], theta [rad] of G1 relative to O2
@@ -27,8 +28,6 @@ the model are on, parameter overrides, constant inputs and integrator settings.
     stick_rule = "paper"        # Moreau: "paper" (f_a decides) or "memory"; default from preset
     v_eps = 0.0                 # Moreau: restitution only for gamma_N < -v_eps
     g_tol = 0.0                 # Moreau: contact active when the gap <= g_tol
-
-    models = ["LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau"]   # for `csfh compare`
 
     [cosim]                     # co-simulation with the comb-drive actuator (`csfh cosim`);
                                 # keys in csfh.model.cosim_section, ignored by the other commands

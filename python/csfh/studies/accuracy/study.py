@@ -125,13 +125,13 @@ def run_study(
     total = sum(len(settings.get(i, [])) for i in ("ME", "CS", "RK4")) * sum(
         m in COMPLIANT for m in models
     ) + len(settings.get("Moreau", [])) * ("Moreau" in models)
-    progress = Progress(f"accuracy {scene.name}", quiet=quiet)
+    progress = Progress(f"accuracy {scene.name}", quiet=quiet, total=total)
     done = 0
 
     def step() -> None:
         nonlocal done
         done += 1
-        progress.update(done / max(total, 1))
+        progress.update(done)
 
     refs: dict[str, Trajectory] = {}
     for model in models:

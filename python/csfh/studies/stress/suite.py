@@ -163,11 +163,11 @@ def evaluate(case: Case, model: str, integ: str) -> Run:
 def run_suite(cases: Sequence[Case], *, quiet: bool = True) -> list[Run]:
     """Every run of every case, each with its verdict."""
     total = sum(len(c.runs) for c in cases)
-    progress = Progress("stress", quiet=quiet)
+    progress = Progress("stress", quiet=quiet, total=total)
     runs: list[Run] = []
     for case in cases:
         for model, integ in case.runs:
             runs.append(evaluate(case, model, integ))
-            progress.update(len(runs) / total)
+            progress.update(len(runs))
     progress.close()
     return runs
