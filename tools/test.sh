@@ -1,10 +1,16 @@
 #!/usr/bin/env bash
 # Run every test: the C unit tests under AddressSanitizer + UndefinedBehaviorSanitizer (ctest),
-# then the Python tests (pytest, against the installed package's FMU) and the linters.
+# then the Python tests (pytest, against the package installed in the virtual environment, with
+# its FMU) and the linters. Sets up first (tools/setup.sh, with the extras the tests use; it
+# reinstalls only what changed), in $CSFH_VENV, else .venv.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-tools/setup.sh
+venv="${CSFH_VENV:-.venv}"
+tools/setup.sh --venv "$venv" --extras test,dask,cosim
+# shellcheck disable=SC1091
+. "$venv/bin/activate"
+unset PYTHONPATH  # the tests use the installed package
 
 echo "== C unit tests (ASan + UBSan)"
 cmake -S . -B build-asan -G Ninja -DCSFH_SANITIZE=ON -DCSFH_BUILD_FMU=OFF -DCMAKE_BUILD_TYPE=Debug >/dev/null
