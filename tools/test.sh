@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Run every test: the C unit tests under AddressSanitizer + UndefinedBehaviorSanitizer (ctest),
 # then the Python tests (pytest, against the package installed in the virtual environment, with
-# its FMU) and the linters. Sets up first (tools/setup.sh, with the extras the tests use; it
-# reinstalls only what changed), in $CSFH_VENV, else .venv.
+# its FMU; they run examples/ too), the documentation build (Sphinx, warnings as errors) and the
+# linters. Sets up first (tools/setup.sh, with the extras the tests use; it reinstalls only what
+# changed), in $CSFH_VENV, else .venv.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 venv="${CSFH_VENV:-.venv}"
-tools/setup.sh --venv "$venv" --extras test,dask,cosim
+tools/setup.sh --venv "$venv" --extras test,dask,cosim,docs
 # shellcheck disable=SC1091
 . "$venv/bin/activate"
 unset PYTHONPATH  # the tests use the installed package
@@ -24,5 +25,9 @@ cmake --build build
 echo "== Python tests"
 python3 -m pytest -q
 
+echo "== docs (Sphinx, warnings as errors)"
+python3 -m sphinx -W --keep-going -q -b html docs build/docs
+python3 tools/model_citations.py check
+
 echo "== lint"
-python3 -m ruff check python tests modelDescription benchmarks
+python3 -m ruff check python tests modelDescription benchmarks examples tools docs/conf.py

@@ -8,8 +8,12 @@ the Moreau time stepper, comparisons and reports on top.
     >>> scene = csfh.load_scene("csfh")
     >>> run = csfh.simulate(scene, "LN_cylinders")      # FMU, model exchange, CVode
     >>> rigid = csfh.moreau(scene, stick_rule="memory")  # Moreau midpoint stepper
+    >>> driven = csfh.cosimulate(csfh.load_scene("combdrive"))  # with the comb-drive FMU
 
-The package, by role (each layer imports only the ones below it):
+The model itself is documented in ``docs/model.md``.
+
+The package, by role (each layer imports only the ones below it; tests/python/test_layout.py
+checks it):
 
 * ``csfh.cli``: the command line;
 * ``csfh.studies``: the paper's comparison, accuracy, stress, sweep and tolerance studies, each
@@ -33,34 +37,49 @@ from typing import TYPE_CHECKING, Any
 from ._version import __version__
 
 if TYPE_CHECKING:
-    from .errors import SceneError
-    from .model.scene import Scene, load_scene, scene_from_dict
-    from .paths import core_library_path, fmu_path
+    from .cosim.coupling import CosimError
+    from .cosim.run import cosimulate
+    from .errors import SceneError, SimulationError
+    from .model.scene import IntegratorSettings, Scene, load_scene, scene_from_dict
+    from .paths import combdrive_fmu_path, core_library_path, fmu_path
     from .runners.moreau import moreau
     from .runners.simulate import simulate
-    from .studies.compare import compare
+    from .studies.compare import Comparison, compare
     from .trajectory import Trajectory
 
 _PUBLIC = {
+    "Comparison": "csfh.studies.compare",
+    "CosimError": "csfh.cosim.coupling",
+    "IntegratorSettings": "csfh.model.scene",
     "Scene": "csfh.model.scene",
     "SceneError": "csfh.errors",
+    "SimulationError": "csfh.errors",
     "Trajectory": "csfh.trajectory",
+    "combdrive_fmu_path": "csfh.paths",
     "compare": "csfh.studies.compare",
     "core_library_path": "csfh.paths",
+    "cosimulate": "csfh.cosim.run",
     "fmu_path": "csfh.paths",
     "load_scene": "csfh.model.scene",
     "moreau": "csfh.runners.moreau",
     "scene_from_dict": "csfh.model.scene",
     "simulate": "csfh.runners.simulate",
 }
+"""Each public name and the module that defines it."""
 
 __all__ = [
+    "Comparison",
+    "CosimError",
+    "IntegratorSettings",
     "Scene",
     "SceneError",
+    "SimulationError",
     "Trajectory",
     "__version__",
+    "combdrive_fmu_path",
     "compare",
     "core_library_path",
+    "cosimulate",
     "fmu_path",
     "load_scene",
     "moreau",

@@ -170,3 +170,17 @@ def test_module_and_console_script_are_the_same_entry_point() -> None:
     assert project["scripts"]["csfh"] == "csfh.cli.main:main"
     assert "from .cli.main import main" in (ROOT / "python/csfh/__main__.py").read_text()
     assert os.path.isfile(ROOT / "python/csfh/py.typed")
+
+
+def test_every_public_name_is_there_and_imported_on_first_use() -> None:
+    """csfh's public names (csfh.__all__) resolve, and importing csfh loads none of them."""
+    code = (
+        "import sys, csfh\n"
+        "loaded = sorted(m for m in sys.modules if m.startswith('csfh.'))\n"
+        "names = [getattr(csfh, n) for n in csfh.__all__]\n"
+        "print(loaded, len(names))"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == f"['csfh._version'] {len(csfh.__all__)}"
+    assert sorted(set(csfh.__all__) - {"__version__"}) == sorted(csfh._PUBLIC)

@@ -4,11 +4,12 @@ entry point that runs them in the chosen engine (fmpy master loop or libcosimpy)
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from ..errors import SceneError
 from ..model.cosim_section import CosimSettings, parse_cosim
-from ..model.scene import Scene
+from ..model.scene import Scene, load_scene
 from ..progress import Progress
 from ..trajectory import Trajectory
 from .fmpy_master import run_fmpy
@@ -31,7 +32,7 @@ RUNNERS: dict[str, Callable[..., Trajectory]] = {"fmpy": run_fmpy, "libcosimpy":
 
 
 def cosimulate(
-    scene: Scene,
+    scene: Scene | str | Path,
     *,
     engine: str | None = None,
     step: float | None = None,
@@ -39,7 +40,17 @@ def cosimulate(
     stop_time: float | None = None,
     quiet: bool = True,
 ) -> Trajectory:
-    """Co-simulate the scene's hinge with its comb-drive actuator ([cosim] section)."""
+    """Co-simulate the scene's hinge with its comb-drive actuator, as set up by the scene's
+    ``[cosim]`` section (its keys: csfh.model.cosim_section), and return the
+    :class:`Trajectory` of the hinge's outputs at the communication points, with the voltage
+    ``V`` and the actuator's ``F_act``, ``F_x``, ``F_y``, ``M``. `scene` is a :class:`Scene`, a
+    built-in scene's name (``combdrive``) or the path of a scene file.
+
+    `engine` (``"fmpy"`` or ``"libcosimpy"``), `step` (s) and `ordering` (``"jacobi"`` or
+    ``"gauss-seidel"``, fmpy only) override the scene's settings, `stop_time` its stop time.
+    Raises :class:`SceneError` for bad settings and :class:`CosimError` when an FMU fails."""
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
     settings = cosim_settings(scene, engine=engine, step=step, ordering=ordering)
     progress = Progress(f"{scene.name}: cosim {settings.engine}", quiet=quiet)
     try:

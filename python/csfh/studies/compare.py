@@ -27,6 +27,9 @@ SUMMARY = "summary.json"
 
 @dataclass
 class Comparison:
+    """What :func:`compare` ran and wrote: the scene, one :class:`Trajectory` per model, and
+    the files (CSV, per-step records, summary.json, figures)."""
+
     scene: Scene
     runs: list[Trajectory]
     files: list[Path]
