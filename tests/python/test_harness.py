@@ -264,6 +264,20 @@ def test_the_scene_example_in_the_documentation_is_a_valid_scene() -> None:
     assert scene.q0 == (0.01, 0.01, 0.0) and scene.inputs == {"F_ext[1]": 0.0}
 
 
+def test_the_scene_example_of_the_user_guide_is_a_valid_scene() -> None:
+    import tomllib
+
+    text = (Path(__file__).resolve().parents[2] / "docs/guide/harness.md").read_text()
+    example = text.split("```toml\n", 1)[1].split("```", 1)[0]
+    scene = scene_from_dict(tomllib.loads(example), "guide")
+    assert scene.name == "my_drop" and scene.models == (
+        "LN_spheres",
+        "LN_cylinders",
+        "LN_ESDU",
+        "Moreau",
+    )
+
+
 @pytest.mark.parametrize("entry", ["simulate", "moreau"])
 def test_public_runners_take_a_scene_name_or_file(entry: str, tmp_path: Path) -> None:
     """csfh.simulate / csfh.moreau accept what csfh.load_scene accepts (as the CLI does)."""

@@ -21,14 +21,14 @@ PRESETS: dict[str, Preset] = {
     "paper": Preset(
         name="paper",
         description="E1 = E2 = 210 GPa (Table 2), Eq. (14) external radius, n = 1.5 for both "
-        "laws, LN-ESDU reading I3, Moreau stick decided by f_a",
+        "laws, LN_ESDU reading I3, Moreau stick decided by f_a",
         parameters={},
         stick_rule="paper",
     ),
     "consistent": Preset(
         name="consistent",
         description="E1 = E2 = 100 GPa (Table 1), internal radius R1 R2/(R2 - R1), linear "
-        "cylinder law (n = 1), LN-ESDU reading I2, Moreau memory stick rule",
+        "cylinder law (n = 1), LN_ESDU reading I2, Moreau memory stick rule",
         parameters={
             "contact.E1": 100e9,
             "contact.E2": 100e9,

@@ -33,7 +33,7 @@ def introduction(study: Study) -> list[str]:
         "",
         "Moreau is rigid: indentation does not exist and its 'force' is an impulse divided by h "
         "(no limit as h -> 0), so only contact time, rebound velocity and trajectory are measured "
-        "for it — against its own h -> 0 reference (convergence) and against the LN K spheres "
+        "for it — against its own h -> 0 reference (convergence) and against the LN_spheres "
         "reference (the difference between the rigid and the compliant model).",
         "",
         "Costs: the number of right-hand-side evaluations (machine-independent), and the "

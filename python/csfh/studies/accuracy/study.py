@@ -1,6 +1,6 @@
 """Error against run time: a work-precision study of every integrator on a scene.
 
-For each event-driven model (LN K spheres, LN K cylinders, LN-ESDU) the integrators are
+For each event-driven model (LN_spheres, LN_cylinders, LN_ESDU) the integrators are
 
 * ``ME``: model exchange of the FMU with fmpy's CVode (BDF), relative tolerance 1e-3 ... 1e-10;
 * ``CS``: co-simulation, CVODE inside the FMU (its default method, auto), the same tolerances;
@@ -26,7 +26,7 @@ Metrics, over the first three contacts (k = 1, 2, 3, matched by order):
 
 Moreau is compared with its own h -> 0 reference on contact time, rebound velocity and trajectory
 (it has no indentation, and its "force" is an impulse divided by h, which has no limit), and
-with the LN K spheres reference on the same three metrics to show the model difference.
+with the LN_spheres reference on the same three metrics to show the model difference.
 """
 
 from __future__ import annotations

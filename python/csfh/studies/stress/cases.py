@@ -63,7 +63,7 @@ PAPER_CONTACT_TIMES = {"LN_spheres": 4.6e-4, "LN_cylinders": 1.56e-3, "LN_ESDU":
 def build_cases(quick: bool = False) -> list[Case]:
     cases: list[Case] = []
     K_sph = 4.7353e10
-    # --- contact stiffness K (LN K spheres, Table 2 exponent), v = 0.767 m/s
+    # --- contact stiffness K (LN_spheres, Table 2 exponent), v = 0.767 m/s
     for K in (1e9, 1e10, K_sph, 1e12, 1e13, 1e14):
         v = 0.767
         tc = hertz_contact_time(K, v)
@@ -100,8 +100,8 @@ def build_cases(quick: bool = False) -> list[Case]:
         c = Case(
             f"impact speed {v:g} m/s",
             "speed",
-            "undamped normal impact, K = 4.7353e10: Hertz rho_max, t_c, rebound (LN K "
-            "spheres); completes, no energy gain (other laws)",
+            "undamped normal impact, K = 4.7353e10: Hertz rho_max, t_c, rebound (LN_spheres); "
+            "completes, no energy gain (other laws)",
             sc,
             _runs(("LN_spheres", "Moreau")),
             checks.hertz_check(K_sph, v),
@@ -112,7 +112,7 @@ def build_cases(quick: bool = False) -> list[Case]:
         c2 = Case(
             f"impact speed {v:g} m/s, cylinders and ESDU",
             "speed",
-            "undamped normal impact, LN K cylinders and LN-ESDU: completes, no energy gain",
+            "undamped normal impact, LN_cylinders and LN_ESDU: completes, no energy gain",
             _impact_scene(f"v={v:g}", v, 4e-3 + 30 * tc, {"contact.cr": 1.0}),
             _runs(("LN_cylinders", "LN_ESDU")),
             checks.no_extra_check,
@@ -257,7 +257,7 @@ def build_cases(quick: bool = False) -> list[Case]:
             "stick-slip f_a = 0.11, f_d = 0.055",
             "friction",
             "first asymmetric impact in the band f_d < |Lambda_T|/Lambda_N < f_a: "
-            "omega after it (PHYSICS.md 7.6: LN K spheres 0.7467, K cylinders 0.7561, "
+            "omega after it (PHYSICS.md 7.6: LN_spheres 0.7467, LN_cylinders 0.7561, "
             "Moreau paper rule 1.3567, memory rule 0.7376)",
             sc,
             _runs(("LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau")),
