@@ -23,7 +23,7 @@ MODEL_COLORS = {
 """The colour of each model (csfh.model.model_info.MODELS) in every figure."""
 
 
-def model_style(model: str) -> dict[str, str]:
+def model_style(model: str) -> dict[str, Any]:
     """Colour and legend label of a model: the label is the model's name (LN_spheres, ...)."""
     return {"color": MODEL_COLORS.get(model, "k"), "label": model}
 

@@ -69,11 +69,11 @@ def _cmd_stress(args: argparse.Namespace) -> int:
             by_model: dict[str, list[str]] = {}
             for model, integ in c.runs:
                 by_model.setdefault(model, []).append(integ)
-            runs = ", ".join(
+            which = ", ".join(
                 m if integs == [m] else f"{m} {'/'.join(integs)}" for m, integs in by_model.items()
             )
             quick = "quick" if c.quick else "     "
-            print(f"{c.group:<{width}}  {quick}  {c.name}: {runs}")
+            print(f"{c.group:<{width}}  {quick}  {c.name}: {which}")
         return 0
     from ..studies.stress.report import write_report
     from ..studies.stress.suite import run_suite

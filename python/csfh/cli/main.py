@@ -17,6 +17,8 @@ from .common import CliError
 
 COMMANDS = (run, accuracy, sweep, cosim)
 """The modules that define the commands: each has register(subparsers)."""
+REPORTED: tuple[type[BaseException], ...] = (CliError, *USER_ERRORS)
+"""Errors reported on one line (exit status 2)."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -37,7 +39,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser = build_parser()
         args = parser.parse_args(argv)
         return int(args.func(args))
-    except (CliError, *USER_ERRORS) as exc:
+    except REPORTED as exc:
         print(f"csfh: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -40,7 +40,7 @@ def write_figures(runs: Sequence[Trajectory], out: Path, title: str, delta: floa
     return [save(fig, out / name, dpi=130) for fig, name in zip(figures, FIGURES, strict=True)]
 
 
-def _style(tr: Trajectory) -> dict[str, str]:
+def _style(tr: Trajectory) -> dict[str, Any]:
     return model_style(tr.model)
 
 
