@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Set up csfh on a Debian machine, in three steps:
-#   1. the system packages it builds with (libsundials-dev, CMake, Ninja, a C compiler), if missing;
+#   1. the system packages it builds with (libsundials-dev, CMake, Ninja, a C compiler; libtbb12
+#      for the Ecos engine of the tests), if missing;
 #   2. a virtual environment with Python >= 3.11: .venv in the repository (created if missing);
 #   3. the Python package into it (pip builds the FMU with CMake through scikit-build-core and ships
 #      it inside csfh/); skipped when nothing it is built from has changed since the last install.
@@ -46,9 +47,10 @@ apt_install() {
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "$@" >/dev/null
 }
 
-step 1 "system packages: libsundials-dev, cmake, ninja-build, gcc"
+step 1 "system packages: libsundials-dev, cmake, ninja-build, gcc, libtbb12"
 missing=()
-for pkg in libsundials-dev cmake ninja-build gcc; do
+# libtbb12: the Ecos co-simulation engine (ecospy, tests/python/test_registry_importers.py)
+for pkg in libsundials-dev cmake ninja-build gcc libtbb12; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
 done
 if [ ${#missing[@]} -gt 0 ]; then

@@ -31,6 +31,7 @@
  * fmi2GetRealStatus(fmi2LastSuccessfulTime)); fmi2SetFMUstate can roll it back.
  *
  * A model without continuous states (the comb-drive actuator) just advances its time. */
+#include <float.h>
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -76,6 +77,15 @@ struct csfh_cvode {
     double t_root;    /* the state there and its time, */
     int root_pending; /* handled in the communication step that contains it */
     long counted_steps; /* CVODE steps already added to the model's counter */
+    /* peak outputs (fmu_model.n_peaks > 0, track_peaks) */
+    N_Vector peak_y, peak_dy; /* work vectors */
+    double peak_t;            /* the end of the last analysed CVODE step: */
+    int peak_slope_valid;     /* its slopes and values there are valid */
+    double peak_slope[FMU_MAX_PEAKS];
+    double peak_end_v[FMU_MAX_PEAKS];
+    int peak_n_max;           /* the maxima inside it: times and values */
+    double peak_max_t[FMU_MAX_PEAKS];
+    double peak_max_v[FMU_MAX_PEAKS][FMU_MAX_PEAKS];
 };
 
 static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
@@ -132,6 +142,12 @@ void cs_free(fmu_instance_t *inst)
     }
     if (cv->y_root != NULL) {
         N_VDestroy(cv->y_root);
+    }
+    if (cv->peak_y != NULL) {
+        N_VDestroy(cv->peak_y);
+    }
+    if (cv->peak_dy != NULL) {
+        N_VDestroy(cv->peak_dy);
     }
     if (cv->ctx != NULL) {
         SUNContext_Free(&cv->ctx);
@@ -334,6 +350,142 @@ static int auto_choose(csfh_cvode_t *cv, double t, char *why, size_t why_size)
     return FMU_CS_BDF;
 }
 
+/* ------------------------------------------------------------------------------------------ */
+/* peak outputs: the largest values of the model's peak quantities over the communication step,
+ * on CVODE's interpolant (the dense output of its last step). Each CVODE step is analysed once,
+ * when it is taken: its end values, and every maximum inside it (the quantity's slope + at the
+ * step's start, <= 0 at its end: the slope's root by regula falsi). Each part of a communication
+ * step then takes the maxima that lie in it; the values at the communication points themselves
+ * are the outputs there (the model's outputs take the max with the step's peaks). */
+
+#define PEAK_ITERATIONS 40 /* regula falsi (Illinois) on the slope: a few are used */
+
+/* The peak quantities v at time t of CVODE's last step, and their time derivatives (a forward
+ * difference along the interpolant's derivative) in slope; 0 when the model has nothing to
+ * track there. */
+static int peak_point(fmu_instance_t *inst, double t, double *v, double *slope)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    double tn = t, hu = 0.0;
+    CVodeGetCurrentTime(cv->mem, &tn);
+    CVodeGetLastStep(cv->mem, &hu);
+    t = t < tn - hu ? tn - hu : (t > tn ? tn : t); /* round-off at the step's ends */
+    if (CVodeGetDky(cv->mem, t, 0, cv->peak_y) < 0) {
+        return 0;
+    }
+    double *py = N_VGetArrayPointer(cv->peak_y), *pd = N_VGetArrayPointer(cv->peak_dy);
+    if (!fmu_model.peak_values(inst->model, py, v) ||
+        CVodeGetDky(cv->mem, t, 1, cv->peak_dy) < 0) {
+        return 0;
+    }
+    const double eps = 1e-7 * (fabs(hu) > 0.0 ? fabs(hu) : 1e-9);
+    for (int i = 0; i < NX; i++) {
+        pd[i] = py[i] + eps * pd[i];
+    }
+    double ve[FMU_MAX_PEAKS];
+    fmu_model.peak_values(inst->model, pd, ve);
+    for (int j = 0; j < fmu_model.n_peaks; j++) {
+        slope[j] = (ve[j] - v[j]) / eps;
+    }
+    return 1;
+}
+
+/* Forget what is known of the last step (CVODE restarted: a new interpolant). */
+static void peaks_forget(csfh_cvode_t *cv)
+{
+    cv->peak_slope_valid = 0;
+    cv->peak_n_max = 0;
+}
+
+/* Analyse CVODE's new step [tn - hu, tn]: its maxima and its end. */
+static void peak_step(fmu_instance_t *inst)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    double tn = 0.0, hu = 0.0, v1[FMU_MAX_PEAKS], s1[FMU_MAX_PEAKS], s0[FMU_MAX_PEAKS];
+    CVodeGetCurrentTime(cv->mem, &tn);
+    CVodeGetLastStep(cv->mem, &hu);
+    const double t0 = tn - hu;
+    const int have_start = cv->peak_slope_valid && cv->peak_t == t0;
+    cv->peak_n_max = 0;
+    if (have_start) {
+        memcpy(s0, cv->peak_slope, sizeof(s0));
+    }
+    if (!peak_point(inst, tn, v1, s1)) {
+        cv->peak_slope_valid = 0;
+        return;
+    }
+    if (have_start || peak_point(inst, t0, cv->peak_max_v[0], s0)) {
+        for (int j = 0; j < fmu_model.n_peaks; j++) {
+            if (!(s0[j] > 0.0 && s1[j] <= 0.0)) {
+                continue;
+            }
+            /* the root of the slope: regula falsi with the Illinois modification (a few
+             * evaluations; the value is flat there, so a time 1e-7 of the step off changes it
+             * by ~1e-14 relative) */
+            double lo = t0, hi = tn, f_lo = s0[j], f_hi = s1[j], v[FMU_MAX_PEAKS], s[FMU_MAX_PEAKS];
+            int side = 0;
+            for (int k = 0; k < PEAK_ITERATIONS && hi - lo > 1e-7 * hu; k++) {
+                double mid = hi - f_hi * (hi - lo) / (f_hi - f_lo);
+                if (!(mid > lo && mid < hi)) {
+                    mid = 0.5 * (lo + hi);
+                }
+                if (!peak_point(inst, mid, v, s)) {
+                    break;
+                }
+                if (s[j] > 0.0) {
+                    lo = mid, f_lo = s[j];
+                    f_hi = side == -1 ? 0.5 * f_hi : f_hi;
+                    side = -1;
+                } else {
+                    hi = mid, f_hi = s[j];
+                    f_lo = side == 1 ? 0.5 * f_lo : f_lo;
+                    side = 1;
+                }
+                if (s[j] == 0.0) {
+                    lo = hi = mid;
+                }
+            }
+            const int m = cv->peak_n_max;
+            if (peak_point(inst, 0.5 * (lo + hi), cv->peak_max_v[m], s)) {
+                cv->peak_max_t[m] = 0.5 * (lo + hi);
+                cv->peak_n_max++;
+            }
+        }
+    }
+    memcpy(cv->peak_slope, s1, sizeof(s1));
+    memcpy(cv->peak_end_v, v1, sizeof(v1));
+    cv->peak_t = tn;
+    cv->peak_slope_valid = 1;
+}
+
+/* The part [ta, tb] of the communication step, the state at tb in cv->y; `stepped`: CVODE took
+ * a new step to get there. */
+static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    if (fmu_model.n_peaks <= 0) {
+        return;
+    }
+    if (cv->peak_y == NULL) {
+        cv->peak_y = N_VClone(cv->y);
+        cv->peak_dy = N_VClone(cv->y);
+        if (cv->peak_y == NULL || cv->peak_dy == NULL) {
+            return; /* out of memory: the peaks fall back to the communication points */
+        }
+    }
+    if (stepped) {
+        peak_step(inst);
+        if (cv->peak_slope_valid && tb == cv->peak_t) {
+            fmu_model.peaks_add(inst->model, cv->peak_end_v);
+        }
+    }
+    for (int m = 0; m < cv->peak_n_max; m++) {
+        if (cv->peak_max_t[m] > ta && cv->peak_max_t[m] <= tb) {
+            fmu_model.peaks_add(inst->model, cv->peak_max_v[m]);
+        }
+    }
+}
+
 /* Take CVODE's solution (tret, y) as the model's time and state. */
 static void take_solution(fmu_instance_t *inst, double tret)
 {
@@ -373,11 +525,15 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             return fmi2Error;
         }
         inst->cvode_needs_reinit = 0;
+        peaks_forget(inst->cvode); /* a new interpolant */
     }
     csfh_cvode_t *cv = inst->cvode;
     const int automatic = configured_method(inst) == FMU_CS_AUTO;
     long events = 0, steps = 0;
     double tret = now;
+    if (fmu_model.n_peaks > 0) { /* the step's peaks start with the values at its start */
+        fmu_model.peaks_begin(inst->model, inst->outputs_valid);
+    }
     while (tret < t_end) {
         /* One internal step per call: the solution is taken at every step, and auto can check
          * the stiffness without waiting for the end of the communication step. No stop time:
@@ -385,7 +541,8 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
          * t_end is not repeated: the state at t_end comes from CVODE's interpolant (for this
          * and for later communication points the step covers), and a root CVODE reports beyond
          * t_end is kept pending until the communication step that contains it. */
-        int flag;
+        int flag, stepped = 0;
+        const double tret_before = tret;
         double tn = tret;
         CVodeGetCurrentTime(cv->mem, &tn);
         if (cv->root_pending && cv->t_root <= t_end) {
@@ -402,6 +559,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
              * bounded by a tenth of the distance to tout): a fixed horizon, so that the step
              * sequence does not depend on the communication grid */
             flag = CVode(cv->mem, tret + FIRST_STEP_HORIZON, cv->y, &tret, CV_ONE_STEP);
+            stepped = flag >= 0;
             if (flag >= 0 && tret > t_end) {
                 if (flag == CV_ROOT_RETURN) {
                     memcpy(N_VGetArrayPointer(cv->y_root), N_VGetArrayPointer(cv->y), NX * sizeof(double));
@@ -433,6 +591,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             inst->cvode_needs_reinit = 1;
             return fmi2Error;
         }
+        track_peaks(inst, tret_before, tret, stepped);
         take_solution(inst, tret);
         if (flag != CV_ROOT_RETURN && tret >= t_end) {
             break;
@@ -457,6 +616,9 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             /* the discrete state changed: restart the integrator at the event (auto: with
              * Adams again) */
             restart = fmu_event_update(inst) != 0;
+            if (restart) {
+                peaks_forget(cv); /* what follows the event has a new interpolant */
+            }
         }
         fmi2Status s = fmi2OK;
         if (restart && automatic && cv->method != FMU_CS_ADAMS) {

@@ -17,6 +17,11 @@ static int prepare(void *m, char *msg, size_t msg_size)
     return csfh_model_prepare((csfh_model_t *)m, msg, msg_size);
 }
 
+static int check_start(void *m, char *msg, size_t msg_size)
+{
+    return csfh_model_check_start((const csfh_model_t *)m, msg, msg_size);
+}
+
 static void init_discrete(void *mv, char *msg, size_t msg_size)
 {
     csfh_model_t *m = (csfh_model_t *)mv;
@@ -63,7 +68,8 @@ static int outputs(void *mv, char *msg, size_t msg_size)
     const int status = csfh_model_outputs(m);
     const csfh_outputs_t *o = &m->out;
     const double values[] = {o->F_N, o->F_T, o->indentation, o->gap, o->v_T,
-                             o->indentation_rate, o->E_total};
+                             o->indentation_rate, o->E_total, o->F_N_peak, o->F_T_peak,
+                             o->indentation_peak};
     for (size_t i = 0; i < sizeof(values) / sizeof(values[0]); i++) {
         if (!isfinite(values[i])) {
             snprintf(msg, msg_size, "non-finite output at t = %.17g", m->time);
@@ -99,6 +105,32 @@ static void add_integrator_steps(void *mv, long steps)
     m->counters.steps += (int)(steps < room ? steps : room);
 }
 
+static void peaks_begin(void *mv, int outputs_current)
+{
+    csfh_model_t *m = (csfh_model_t *)mv;
+    m->peaks.active = 1;
+    if (outputs_current) {
+        m->peaks.v[0] = m->out.F_N;
+        m->peaks.v[1] = fabs(m->out.F_T);
+        m->peaks.v[2] = m->out.indentation;
+    } else {
+        csfh_model_peak_values(m, m->x, m->peaks.v);
+    }
+}
+
+static int peak_values(void *m, const double *x, double *v)
+{
+    return csfh_model_peak_values((csfh_model_t *)m, x, v);
+}
+
+static void peaks_add(void *mv, const double *v)
+{
+    csfh_model_t *m = (csfh_model_t *)mv;
+    for (int j = 0; j < CSFH_N_PEAKS; j++) {
+        m->peaks.v[j] = v[j] > m->peaks.v[j] ? v[j] : m->peaks.v[j];
+    }
+}
+
 const fmu_model_t fmu_model = {
     .guid = CSFH_GUID,
     .model_identifier = CSFH_MODEL_IDENTIFIER,
@@ -112,6 +144,7 @@ const fmu_model_t fmu_model = {
     .der_offset = offsetof(csfh_model_t, der),
     .set_defaults = set_defaults,
     .prepare = prepare,
+    .check_start = check_start,
     .init_discrete = init_discrete,
     .derivatives = derivatives,
     .event_indicators = event_indicators,
@@ -119,4 +152,8 @@ const fmu_model_t fmu_model = {
     .outputs = outputs,
     .add_integrator_steps = add_integrator_steps,
     .cs_method = cs_method,
+    .n_peaks = CSFH_N_PEAKS,
+    .peaks_begin = peaks_begin,
+    .peak_values = peak_values,
+    .peaks_add = peaks_add,
 };

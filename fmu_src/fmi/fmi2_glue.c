@@ -371,6 +371,10 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     }
     char msg[MSG_SIZE];
     msg[0] = '\0';
+    if (fmu_model.check_start != NULL && fmu_model.check_start(inst->model, msg, sizeof(msg)) != 0) {
+        LOG_ERROR(inst, "fmi2ExitInitializationMode: %s", msg);
+        return fmi2Error;
+    }
     fmu_model.init_discrete(inst->model, msg, sizeof(msg));
     fmu_invalidate(inst);
     if (msg[0] != '\0') {
@@ -910,11 +914,20 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
         !not_null(inst, "fmi2NewDiscreteStates", eventInfo, "eventInfo")) {
         return fmi2Error;
     }
-    fmu_event_update(inst);
+    const int mode_changed = fmu_event_update(inst) != 0;
     eventInfo->newDiscreteStatesNeeded = fmi2False;
     eventInfo->terminateSimulation = fmi2False;
     eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
-    eventInfo->valuesOfContinuousStatesChanged = fmi2False; /* contact events never jump states */
+    /* The states keep their values at a contact event, but the right-hand side switches (the
+     * contact force acts in the contact mode only), so the importer's integrator must restart
+     * here: what it computed past the event used the other mode, and a multistep history
+     * reaching across the switch is wrong. FMI 2.0 has no separate "restart" flag, and importers
+     * restart when this flag is set (e.g. Reference-FMUs' fmusim restarts only then), so it is
+     * set at every mode switch, and only then. The states returned are the unchanged ones, and
+     * the event indicator keeps its sign across the switch (hysteresis), so re-reading them
+     * cannot start another event: the event iteration ends (README, "Using the FMU in other
+     * tools"). */
+    eventInfo->valuesOfContinuousStatesChanged = mode_changed ? fmi2True : fmi2False;
     eventInfo->nextEventTimeDefined = fmi2False;
     eventInfo->nextEventTime = 0.0;
     return fmi2OK;

@@ -105,12 +105,16 @@ def run_libcosimpy(
         for name, value in values.items():
             var = variables[name]
             if var.type == "Enumeration":
-                if int(value) != int(var.start):
+                # libcosimpy ignores FMI 2.0 Enumeration variables: set its Integer twin
+                if f"{name}_number" in refs:
+                    name, var = f"{name}_number", variables[f"{name}_number"]
+                elif int(value) != int(var.start):
                     raise CosimError(
                         f"libcosimpy ignores FMI 2.0 Enumeration variables: {name} = {value} "
                         f"cannot be set (the FMU default is {var.start}); use the fmpy engine"
                     )
-                continue
+                else:
+                    continue
             if var.type == "Real":
                 ok = ex.real_initial_value(slave, refs[name], float(value))
             elif var.type == "Boolean":

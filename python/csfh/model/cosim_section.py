@@ -30,7 +30,8 @@ Scene section (all keys optional except the voltage ramp):
 
 The rest of the scene (initial state, parts, parameters, stop_time, preset) sets up the hinge as
 for every other command; its contact law is the scene's (the FMU default LN_spheres unless
-[parameters] sets contact.law). libcosim (libcosimpy 0.0.6) ignores FMI 2.0 Enumeration
+[parameters] sets contact.law; the libcosimpy engine sets its Integer twin contact.law_number).
+libcosim (libcosimpy 0.0.6) ignores FMI 2.0 Enumeration
 variables, so with that engine an enumeration can only keep its FMU start value.
 """
 

@@ -278,6 +278,16 @@ def _check_values(scene: Scene) -> None:
         model.prepare()
     except ParameterError as exc:
         raise SceneError(f"parameters: {exc}") from None
+    # the FMU refuses a start deeper in the bore than contact.max_initial_indentation
+    import numpy as np
+
+    model.state = np.array(scene.x0)
+    depth, limit = -model.get("contact.gap"), model.get("contact.max_initial_indentation")
+    if depth > limit:
+        raise SceneError(
+            f"initial.q = {list(scene.q0)} is {depth:.6g} m deep in the bore (indentation "
+            f"{depth:.6g} m > contact.max_initial_indentation = {limit:g} m)"
+        )
 
 
 def load_scene(scene: str | Path) -> Scene:
