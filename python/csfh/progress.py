@@ -20,7 +20,7 @@ class Progress:
         quiet: bool = False,
         *,
         total: int | None = None,
-        unit: str = "runs",
+        unit: str = "run",
         stream: TextIO | None = None,
         delay: float = 1.0,
     ) -> None:
@@ -47,7 +47,7 @@ class Progress:
             self._bar = tqdm(
                 total=total,
                 desc=label,
-                unit=f" {unit}",
+                unit=unit,
                 file=self.stream,
                 delay=delay,
                 leave=False,
