@@ -99,6 +99,35 @@ static void add_integrator_steps(void *mv, long steps)
     m->counters.steps += (int)(steps < room ? steps : room);
 }
 
+/* Restored FMU state: the fields that are not stored table variables (checked by the glue:
+ * time, states, inputs, parameters, contact.active/onset_speed/onset_time/release_*) and not
+ * recomputed (d, out, der). */
+static int check_state(const void *mv, char *msg, size_t msg_size)
+{
+    const csfh_model_t *m = (const csfh_model_t *)mv;
+    const struct {
+        const char *name;
+        int value;
+    } counts[] = {{"contact.count", m->z.contact_count},
+                  {"diagnostics.rhs_evaluations", m->counters.rhs},
+                  {"diagnostics.flexure_evaluations", m->counters.flexure},
+                  {"diagnostics.contact_evaluations", m->counters.contact},
+                  {"diagnostics.friction_evaluations", m->counters.friction},
+                  {"diagnostics.integrator_steps", m->counters.steps}};
+    for (size_t i = 0; i < sizeof(counts) / sizeof(counts[0]); i++) {
+        if (counts[i].value < 0) {
+            snprintf(msg, msg_size, "%s = %d is negative", counts[i].name, counts[i].value);
+            return -1;
+        }
+    }
+    if (m->contact_by_gap != 0) { /* the RK4 baseline's switch: never set in the FMU */
+        snprintf(msg, msg_size, "contact_by_gap = %d (internal switch of the RK4 baseline) is not 0",
+                 m->contact_by_gap);
+        return -1;
+    }
+    return 0;
+}
+
 const fmu_model_t fmu_model = {
     .guid = CSFH_GUID,
     .model_identifier = CSFH_MODEL_IDENTIFIER,
@@ -119,4 +148,5 @@ const fmu_model_t fmu_model = {
     .outputs = outputs,
     .add_integrator_steps = add_integrator_steps,
     .cs_method = cs_method,
+    .check_state = check_state,
 };
