@@ -108,6 +108,18 @@ void fmu_invalidate(fmu_instance_t *inst)
     inst->derivatives_valid = 0;
 }
 
+/* Model exchange: the time and states the next completed integrator step is compared with
+ * (check_me_time_resolution): set at the end of initialization, at every completed step and
+ * when an FMU state is restored. */
+static void step_reference(fmu_instance_t *inst)
+{
+    inst->last_step_time = *fmu_time(inst);
+    if (fmu_model.n_states > 0) {
+        memcpy(inst->last_step_x, fmu_states(inst), (size_t)fmu_model.n_states * sizeof(double));
+    }
+    inst->last_step_valid = 1;
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* model helpers */
 
@@ -384,7 +396,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
         fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", msg);
     }
     inst->cvode_needs_reinit = 1;
-    inst->last_step_valid = 0;
+    step_reference(inst);
     inst->state = inst->type == fmi2ModelExchange ? FMU_EVENT : FMU_STEP_COMPLETE;
     return fmi2OK;
 }
@@ -910,7 +922,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
     inst->state = (fmu_state_t)s->state;
     inst->prepared = prepared;
     inst->warned_outputs = s->warned_outputs;
-    inst->last_step_valid = 0;
+    step_reference(inst);
     inst->cvode_needs_reinit = 1;
     fmu_invalidate(inst);
     return fmi2OK;
@@ -1109,11 +1121,7 @@ static fmi2Status check_me_time_resolution(fmu_instance_t *inst)
             }
         }
     }
-    inst->last_step_time = t;
-    if (bytes > 0) {
-        memcpy(inst->last_step_x, x, bytes);
-    }
-    inst->last_step_valid = 1;
+    step_reference(inst);
     return status;
 }
 
