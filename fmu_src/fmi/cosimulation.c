@@ -58,7 +58,9 @@
 
 #define NX fmu_model.n_states
 #define MAX_EVENTS_PER_STEP 1000000L  /* guards against an endless chain of events */
-#define MAX_STEPS_PER_CALL 500000L    /* CVODE steps per fmi2DoStep */
+#ifndef MAX_STEPS_PER_CALL
+#define MAX_STEPS_PER_CALL 500000L    /* CVODE steps per fmi2DoStep (the fuzz build lowers it) */
+#endif
 #define AUTO_WINDOW 100L              /* auto: steps per decision */
 #define AUTO_SUSPECT_FAILED 0.05      /* auto: failed fraction of an Adams window that triggers a trial */
 #define AUTO_BDF_COST 1.5             /* auto: cost of a BDF step over an Adams step */
@@ -104,6 +106,13 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *gout, void *user_data)
     fmu_instance_t *inst = (fmu_instance_t *)user_data;
     (void)t;
     fmu_model.event_indicators(inst->model, N_VGetArrayPointer(y), gout);
+    for (int i = 0; i < fmu_model.n_event_indicators; i++) {
+        if (!isfinite(gout[i])) {
+            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
+                    "fmi2DoStep: non-finite event indicator z[%d] = %g", i, gout[i]);
+            return 1; /* CVODE fails the step (CV_RTFUNC_FAIL) */
+        }
+    }
     return 0;
 }
 

@@ -137,6 +137,18 @@ static fmi2Status prepare(fmu_instance_t *inst, const char *function)
     return fmi2OK;
 }
 
+/* The continuous states as text, for messages. */
+static const char *state_text(fmu_instance_t *inst, char *text, size_t size)
+{
+    const double *x = fmu_states(inst);
+    size_t k = 0;
+    text[0] = '\0';
+    for (int i = 0; i < fmu_model.n_states && k + 1 < size; i++) {
+        k += (size_t)snprintf(text + k, size - k, "%s%g", i ? ", " : "", x[i]);
+    }
+    return text;
+}
+
 static fmi2Status update_derivatives(fmu_instance_t *inst, const char *function)
 {
     if (inst->derivatives_valid || fmu_model.n_states == 0) {
@@ -149,13 +161,8 @@ static fmi2Status update_derivatives(fmu_instance_t *inst, const char *function)
     const int status = fmu_model.derivatives(inst->model, x, fmu_derivatives(inst));
     if (status == FMU_MODEL_NONFINITE) {
         char text[MSG_SIZE];
-        size_t k = 0;
-        text[0] = '\0';
-        for (int i = 0; i < fmu_model.n_states && k + 1 < sizeof(text); i++) {
-            k += (size_t)snprintf(text + k, sizeof(text) - k, "%s%g", i ? ", " : "", x[i]);
-        }
         LOG_ERROR(inst, "%s: non-finite derivative at t = %.17g, state [%s]", function,
-                  *fmu_time(inst), text);
+                  *fmu_time(inst), state_text(inst, text, sizeof(text)));
         return fmi2Error;
     }
     inst->derivatives_valid = 1;
@@ -1221,6 +1228,15 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], s
     }
     if (ni > 0) {
         fmu_model.event_indicators(inst->model, fmu_states(inst), eventIndicators);
+    }
+    for (size_t i = 0; i < ni; i++) {
+        if (!isfinite(eventIndicators[i])) {
+            char text[MSG_SIZE];
+            LOG_ERROR(inst, "fmi2GetEventIndicators: non-finite event indicator z[%zu] = %g at "
+                            "t = %.17g, state [%s]",
+                      i, eventIndicators[i], *fmu_time(inst), state_text(inst, text, sizeof(text)));
+            return fmi2Error;
+        }
     }
     return fmi2OK;
 }

@@ -642,3 +642,22 @@ def test_masters_time_arithmetic_is_accepted(make_fmu: MakeFmu, vr: dict[str, in
                 if master == "sum":
                     t = t + h
             assert not log.errors()
+
+
+# ------------------------------------------------------------------------------------------
+# found by the fuzzer (tests/fuzz)
+
+
+def test_non_finite_event_indicator_is_an_error(make_fmu: MakeFmu, vr: dict[str, int]) -> None:
+    """States at the edge of the double range (each finite, as any start value may be) give a
+    gap of -inf: fmi2GetEventIndicators returned it with fmi2OK. Now fmi2Error naming the
+    indicator and the state."""
+    fmu, log = make_fmu("ME")
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setReal([vr["body1.x"], vr["body1.y"]], [1.7e308, 1.7e308])
+    fmu.exitInitializationMode()
+    z = np.zeros(1)
+    with pytest.raises(FMICallException):
+        fmu.getEventIndicators(z.ctypes.data_as(POINTER(c_double)), 1)
+    assert any("non-finite event indicator z[0] = -inf" in m for m in log.errors())
