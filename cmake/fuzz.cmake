@@ -51,12 +51,14 @@ endforeach()
 add_custom_target(csfh_fuzz)
 add_dependencies(csfh_fuzz fuzz_fmi_csfh fuzz_fmi_combdrive fmu_states_csfh fmu_states_combdrive)
 
-# Fixed seeds, bounded: about a minute for both FMUs on one core of the CI machine. Hangs are
-# failures (the driver's own alarm, then ctest's timeout).
+# Fixed seeds, bounded: 2 x 320000 calls, about a minute for both FMUs on one core. Hangs are
+# failures (the driver's alarm per sequence, then ctest's timeout).
 set(_fuzz_env "ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1"
               "UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1")
-add_test(NAME fuzz_fmi_csfh COMMAND fuzz_fmi_csfh --seeds 1 12 --sequences 40 --calls 160)
-add_test(NAME fuzz_fmi_combdrive COMMAND fuzz_fmi_combdrive --seeds 1 8 --sequences 40 --calls 160)
+add_test(NAME fuzz_fmi_csfh
+         COMMAND fuzz_fmi_csfh --seeds 1 32 --sequences 50 --calls 200 --huge 8)
+add_test(NAME fuzz_fmi_combdrive
+         COMMAND fuzz_fmi_combdrive --seeds 1 32 --sequences 50 --calls 200 --huge 8)
 add_test(NAME fmu_states_csfh COMMAND fmu_states_csfh)
 add_test(NAME fmu_states_combdrive COMMAND fmu_states_combdrive)
 set_tests_properties(fuzz_fmi_csfh fuzz_fmi_combdrive fmu_states_csfh fmu_states_combdrive PROPERTIES

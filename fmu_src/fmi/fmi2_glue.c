@@ -108,6 +108,17 @@ void fmu_invalidate(fmu_instance_t *inst)
     inst->derivatives_valid = 0;
 }
 
+/* The relative resolution of a time step below which precision lost to the double time is
+ * reported (fmi2DoStep, fmi2CompletedIntegratorStep): the integration tolerance, but not finer
+ * than TIME_RESOLUTION_FLOOR (one part in a million: a step of 1e-7 s at t = 5 s is resolved to
+ * 1e-8 relative, which no result here notices, and a warning there would be noise). */
+#define TIME_RESOLUTION_FLOOR 1e-6
+
+static double time_resolution_needed(const fmu_instance_t *inst)
+{
+    return inst->tolerance > TIME_RESOLUTION_FLOOR ? inst->tolerance : TIME_RESOLUTION_FLOOR;
+}
+
 /* Model exchange: the time and states the next completed integrator step is compared with
  * (check_me_time_resolution): set at the end of initialization, at every completed step and
  * when an FMU state is restored. */
@@ -1102,9 +1113,9 @@ fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
  * FMU can promise is to report what it sees of the importer's time losing precision. At every
  * completed integrator step it compares the time with the previous completed step's: if the
  * states moved but the double time represents the increment dt worse than the tolerance
- * (ulp(t) > tolerance * dt, including dt = 0: steps below the resolution of t), it returns
- * fmi2Warning (logged once per instance). A time that went backwards (the importer rolled its
- * integrator back) is not judged. */
+ * (ulp(t) > max(tolerance, 1e-6) * dt, including dt = 0: steps below the resolution of t), it
+ * returns fmi2Warning (logged once per instance). A time that went backwards (the importer
+ * rolled its integrator back) is not judged. */
 static fmi2Status check_me_time_resolution(fmu_instance_t *inst)
 {
     const double t = *fmu_time(inst);
@@ -1115,16 +1126,16 @@ static fmi2Status check_me_time_resolution(fmu_instance_t *inst)
         const double dt = t - inst->last_step_time;
         const double ulp = nextafter(fabs(t), INFINITY) - fabs(t);
         const int moved = memcmp(x, inst->last_step_x, bytes) != 0;
-        if (moved && dt >= 0.0 && ulp > inst->tolerance * dt) {
+        if (moved && dt >= 0.0 && ulp > time_resolution_needed(inst) * dt) {
             status = fmi2Warning;
             if (!inst->warned_time) {
                 inst->warned_time = 1;
                 fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING,
                         "fmi2CompletedIntegratorStep: the time t = %.17g resolves steps to %g s "
                         "only; the integrator step from t = %.17g (dt = %g s) is represented to "
-                        "worse than the tolerance %g: integrate in a time measured from a nearer "
+                        "worse than %g relative: integrate in a time measured from a nearer "
                         "origin (further such steps return fmi2Warning without a message)",
-                        t, ulp, inst->last_step_time, dt, inst->tolerance);
+                        t, ulp, inst->last_step_time, dt, time_resolution_needed(inst));
             }
         }
     }
@@ -1334,8 +1345,8 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
  * computes it) finite and, for h > 0, later than T. The FMU integrates from its own time T to
  * t + h, so its time never goes backwards. A refused step is fmi2Error and changes nothing.
  * Precision lost: if the double time represents the step T -> t + h worse than the integration
- * tolerance (|(t + h - T) - h| > tolerance * h, e.g. h = 1e-3 s at t = 1e10 s, where the
- * resolution is 1.9e-6 s), the step is taken and reported with fmi2Warning (logged once). */
+ * tolerance (|(t + h - T) - h| > max(tolerance, 1e-6) h, e.g. h = 1e-3 s at t = 1e10 s, where
+ * the resolution is 1.9e-6 s), the step is taken and reported with fmi2Warning (logged once). */
 static fmi2Status check_step(fmu_instance_t *inst, double t, double h, double *t_end)
 {
     const double T = *fmu_time(inst);
@@ -1369,17 +1380,17 @@ static fmi2Status check_step(fmu_instance_t *inst, double t, double h, double *t
         return fmi2Error;
     }
     const double taken = *t_end - T;
-    if (fabs(taken - h) > inst->tolerance * h) {
+    if (fabs(taken - h) > time_resolution_needed(inst) * h) {
         if (!inst->warned_time) {
             inst->warned_time = 1;
             fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING,
                     "fmi2DoStep: the time t = %.17g resolves steps to %g s only: "
                     "communicationStepSize = %.17g is taken as %.17g (relative difference %.3g > "
-                    "tolerance %g); the FMU integrates exactly that step, but the communication "
-                    "points are not where the master meant them (further such steps return "
-                    "fmi2Warning without a message)",
+                    "%g); the FMU integrates exactly that step, but the communication points are "
+                    "not where the master meant them (further such steps return fmi2Warning "
+                    "without a message)",
                     T, nextafter(fabs(*t_end), INFINITY) - fabs(*t_end), h, taken,
-                    fabs(taken - h) / h, inst->tolerance);
+                    fabs(taken - h) / h, time_resolution_needed(inst));
         }
         return fmi2Warning;
     }

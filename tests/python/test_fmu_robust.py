@@ -541,15 +541,22 @@ def me_euler_statuses(make_fmu: MakeFmu, vr: dict[str, int], t0: float, h: float
 
 @pytest.mark.parametrize(
     ("t0", "h", "expected"),
-    [(0.0, 1e-5, OK), (1e10, 1e-5, WARNING), (1e10, 1e-7, WARNING), (1e10, 10.0, OK)],
+    [
+        (0.0, 1e-5, OK),
+        (5.0, 1e-7, OK),  # resolved to 9e-9 relative: below the 1e-6 floor, no noise
+        (1e10, 1e-5, WARNING),
+        (1e10, 1e-7, WARNING),
+        (1e10, 10.0, OK),
+    ],
 )
 def test_me_steps_the_time_cannot_resolve_are_reported(
     make_fmu: MakeFmu, vr: dict[str, int], t0: float, h: float, expected: int
 ) -> None:
     """Model exchange: the model is autonomous, so its values do not depend on the start time;
     what the FMU reports is the importer's time losing precision: integrator steps that the
-    double time represents worse than the tolerance (1e-5 s at 1e10 s: 19 % off; 1e-7 s: the
-    time does not move) give fmi2Warning from fmi2CompletedIntegratorStep, once logged."""
+    double time represents worse than the tolerance and 1e-6 (1e-5 s at 1e10 s: 19 % off;
+    1e-7 s: the time does not move) give fmi2Warning from fmi2CompletedIntegratorStep, once
+    logged."""
     statuses = me_euler_statuses(make_fmu, vr, t0, h)
     assert set(statuses) == {expected}, statuses
 
@@ -661,3 +668,37 @@ def test_non_finite_event_indicator_is_an_error(make_fmu: MakeFmu, vr: dict[str,
     with pytest.raises(FMICallException):
         fmu.getEventIndicators(z.ctypes.data_as(POINTER(c_double)), 1)
     assert any("non-finite event indicator z[0] = -inf" in m for m in log.errors())
+
+
+# ------------------------------------------------------------------------------------------
+# a rejected call changes nothing: fmi2Set* with several values is all or nothing
+
+
+@pytest.mark.parametrize("kind", ["ME", "CS"])
+def test_set_with_one_bad_value_changes_nothing(
+    make_fmu: MakeFmu, vr: dict[str, int], model_description: ModelDescription, kind: str
+) -> None:
+    """fmi2SetReal([c_r, m], [0.5, -1]) applied c_r before it refused m; now nothing is set."""
+    fmu, log = make_fmu(kind)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    before = all_values(fmu, model_description)
+    with pytest.raises(FMICallException):
+        fmu.setReal([vr["contact.cr"], vr["body1.m"]], [0.5, -1.0])
+    assert any(names_value(m, "body1.m", -1.0) for m in log.errors())
+    assert_same(all_values(fmu, model_description), before)
+
+
+def test_tunable_parameters_are_checked_together(make_fmu: MakeFmu, vr: dict[str, int]) -> None:
+    """While running, tunable parameters set in one call are cross-checked together (v0 < v1):
+    moving both up at once is accepted, and a call that breaks the rule changes neither."""
+    fmu, log = make_fmu("CS")
+    setup_scene(fmu, vr)
+    fmu.doStep(0.0, 1e-3)
+    fmu.setReal([vr["friction.v0"], vr["friction.v1"]], [0.02, 0.03])  # v0 > the old v1 = 0.01
+    assert fmu.getReal([vr["friction.v0"], vr["friction.v1"]]) == [0.02, 0.03]
+    with pytest.raises(FMICallException):
+        fmu.setReal([vr["friction.v1"], vr["friction.fd"]], [0.01, 0.06])
+    assert any(names_value(m, "friction.v1", 0.01) for m in log.errors())
+    assert fmu.getReal([vr["friction.v1"], vr["friction.fd"]]) == [0.03, 0.055]
+    fmu.doStep(1e-3, 1e-3)
