@@ -16,6 +16,6 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 
-python3 -m pip install -q --disable-pip-version-check ".[test,dask,cosim]"
+python3 -m pip install -q --disable-pip-version-check ".[test,dask,cosim,docs]"
 command -v pyenv >/dev/null 2>&1 && pyenv rehash || true
 echo "setup: csfh $(python3 -c 'import csfh; print(csfh.__version__, csfh.fmu_path())')"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Run every test: the C unit tests under AddressSanitizer + UndefinedBehaviorSanitizer (ctest), the
 # FMI fuzz tests (ASan + UBSan + LeakSanitizer), then the Python tests (pytest, against the
-# installed package's FMU) and the linters.
+# installed package's FMU; they run examples/ too), the documentation build (Sphinx, warnings as
+# errors) and the linters.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -24,5 +25,9 @@ cmake --build build
 echo "== Python tests"
 python3 -m pytest -q
 
+echo "== docs (Sphinx, warnings as errors)"
+python3 -m sphinx -W --keep-going -q -b html docs build/docs
+python3 tools/model_citations.py check
+
 echo "== lint"
-python3 -m ruff check python tests modelDescription benchmarks
+python3 -m ruff check python tests modelDescription benchmarks examples tools docs/conf.py

@@ -695,7 +695,14 @@ def cosimulate(
     stop_time: float | None = None,
     quiet: bool = True,
 ) -> Trajectory:
-    """Co-simulate the scene's hinge with its comb-drive actuator ([cosim] section)."""
+    """Co-simulate the scene's hinge with its comb-drive actuator, as set up by the scene's
+    ``[cosim]`` section (see this module's docstring for its keys), and return the
+    :class:`Trajectory` of the hinge's outputs at the communication points, with the voltage
+    ``V`` and the actuator's ``F_act``, ``F_x``, ``F_y``, ``M``.
+
+    `engine` (``"fmpy"`` or ``"libcosimpy"``), `step` (s) and `ordering` (``"jacobi"`` or
+    ``"gauss-seidel"``, fmpy only) override the scene's settings, `stop_time` its stop time.
+    Raises :class:`SceneError` for bad settings and :class:`CosimError` when an FMU fails."""
     settings = cosim_settings(scene, engine=engine, step=step, ordering=ordering)
     progress = Progress(f"{scene.name}: cosim {settings.engine}", quiet=quiet)
     try:
