@@ -402,14 +402,30 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     if (!allowed(inst, "fmi2ExitInitializationMode", FMU_INITIALIZATION)) {
         return fmi2Error;
     }
-    inst->prepared = 0; /* validate everything once more, whatever was read before */
-    if (prepare(inst, "fmi2ExitInitializationMode") != fmi2OK) {
+    /* a refused call changes nothing: the derived quantities that prepare() computes are put
+     * back if the start state is then refused */
+    void *saved = malloc(fmu_model.size);
+    if (saved == NULL) {
+        LOG_ERROR(inst, "fmi2ExitInitializationMode: out of memory");
         return fmi2Error;
     }
+    memcpy(saved, inst->model, fmu_model.size);
+    const int was_prepared = inst->prepared;
+    inst->prepared = 0; /* validate everything once more, whatever was read before */
     char msg[MSG_SIZE];
     msg[0] = '\0';
-    if (fmu_model.check_start != NULL && fmu_model.check_start(inst->model, msg, sizeof(msg)) != 0) {
+    int refused = prepare(inst, "fmi2ExitInitializationMode") != fmi2OK;
+    if (!refused && fmu_model.check_start != NULL &&
+        fmu_model.check_start(inst->model, msg, sizeof(msg)) != 0) {
         LOG_ERROR(inst, "fmi2ExitInitializationMode: %s", msg);
+        refused = 1;
+    }
+    if (refused) {
+        memcpy(inst->model, saved, fmu_model.size);
+        inst->prepared = was_prepared;
+    }
+    free(saved);
+    if (refused) {
         return fmi2Error;
     }
     fmu_model.init_discrete(inst->model, msg, sizeof(msg));
