@@ -4,8 +4,8 @@ the same FMU through Python callbacks) on 1 s of the `csfh` scene: same FMU, sam
 (medians of repeats, the variants interleaved). Target: CS >= 10x faster.
 
 A. Complete runs with the harness drivers (instantiate, set the scene, simulate, free):
-   ME: csfh.fmu_runner.simulate_me (one CVode step at a time, dense output onto the grid)
-   CS: csfh.fmu_runner.simulate_cs (one fmi2DoStep per grid point)
+   ME: csfh.runners.fmu.simulate_me (one CVode step at a time, dense output onto the grid)
+   CS: csfh.runners.fmu.simulate_cs (one fmi2DoStep per grid point)
    and fmpy's own two drivers, fmpy.simulate_fmu with fmi_type ModelExchange / CoSimulation.
 B. The simulation loop alone, after initialization (what differs between the interfaces; the
    FMU loading and the parameter setting cost the same in both): fmpy's CVodeSolver stepping the
@@ -40,10 +40,11 @@ import fmpy
 import numpy as np
 from c_master import default_master, run_c_master
 
-from csfh import load_scene, model_info
-from csfh.direct_calls import DirectCalls
-from csfh.fmu_runner import STATE_NAMES, simulate_cs, simulate_me
-from csfh.scene import Scene
+from csfh import load_scene
+from csfh.model import model_info
+from csfh.model.scene import Scene
+from csfh.runners.direct_calls import DirectCalls
+from csfh.runners.fmu import STATE_NAMES, simulate_cs, simulate_me
 
 LAW = "LN_spheres"
 METHODS = {"auto": 1, "BDF": 2, "Adams": 3}  # solver.method (enumeration CvodeMethod)
@@ -86,7 +87,7 @@ class Loops:
     def __init__(self, scene: Scene) -> None:
         from fmpy.fmi2 import FMU2Model, FMU2Slave
 
-        from csfh._paths import fmu_path
+        from csfh.paths import fmu_path
 
         md = model_info.model_description()
         directory = fmpy.extract(str(fmu_path()))

@@ -29,7 +29,7 @@ TARGET = 1e7
 def _batch(n: int, stop_time: float) -> tuple[int, float, float]:
     """One batch of n variants (body mass spread): (variant-steps, in-call s, total s)."""
     from csfh import load_scene
-    from csfh.moreau_batch import moreau_batch
+    from csfh.runners.moreau_batch import moreau_batch
 
     scene = load_scene("csfh")
     sets = [{"body1.m": 10.0 + 1e-3 * i} for i in range(n)]
@@ -39,7 +39,7 @@ def _batch(n: int, stop_time: float) -> tuple[int, float, float]:
 
 
 def _warm(_: int) -> int:
-    import csfh.moreau_batch  # noqa: F401  (import and load the core library once)
+    import csfh.runners.moreau_batch  # noqa: F401  (import and load the core library once)
 
     return 0
 
@@ -49,7 +49,9 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="smaller batches (CI smoke run)")
     args = parser.parse_args()
     from csfh import load_scene
-    from csfh.tasks import ResultStore, Task, default_workers, run_tasks
+    from csfh.batch.executors import default_workers, run_tasks
+    from csfh.batch.store import ResultStore
+    from csfh.batch.tasks import Task
 
     n, stop = (16, 0.25) if args.quick else (64, 1.0)
     workers = default_workers()

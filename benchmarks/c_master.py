@@ -15,9 +15,9 @@ from typing import Any
 
 import fmpy
 
-from csfh import model_info
-from csfh.fmu_runner import STATE_NAMES
-from csfh.scene import Scene
+from csfh.model import model_info
+from csfh.model.scene import Scene
+from csfh.runners.fmu import STATE_NAMES
 
 DEFAULT_MASTER = Path(__file__).parents[1] / "build" / "bench_cs_master"
 
@@ -29,7 +29,7 @@ def default_master() -> Path:
 
 @cache
 def _binary() -> str:
-    from csfh._paths import fmu_path
+    from csfh.paths import fmu_path
 
     directory = fmpy.extract(str(fmu_path()))
     return str(Path(directory) / "binaries" / "linux64" / "csfh.so")

@@ -18,7 +18,10 @@ Optional keys of [model] name the C side; their defaults are the csfh model's:
     c_include = "csfh_model.h"        the header that declares it
     log_events_description = "..."    description of the logEvents log category
 
-Usage: generate.py VARIABLES_TOML OUTDIR
+The model's `version` is the package's (python/csfh/_version.py, the one place of the version;
+CMake passes it as --version).
+
+Usage: generate.py [--version X.Y.Z] VARIABLES_TOML OUTDIR
 """
 
 from __future__ import annotations
@@ -447,8 +450,20 @@ def c_source(spec: dict, source: str = "variables.toml") -> str:
     return "\n".join(out) + "\n"
 
 
+VERSION_FILE = Path(__file__).resolve().parents[1] / "python" / "csfh" / "_version.py"
+
+
+def package_version(path: Path = VERSION_FILE) -> str:
+    """The version in python/csfh/_version.py (`__version__ = "X.Y.Z"`)."""
+    m = re.search(r'^__version__ = "(\d+\.\d+\.\d+)"$', path.read_text(encoding="utf-8"), re.M)
+    if m is None:
+        raise SpecError(f'{path}: no line __version__ = "X.Y.Z"')
+    return m.group(1)
+
+
 def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--version", help="model version (default: python/csfh/_version.py)")
     ap.add_argument("variables", type=Path)
     ap.add_argument("outdir", type=Path)
     ap.add_argument(
@@ -460,8 +475,11 @@ def main(argv: list[str]) -> int:
     args = ap.parse_args(argv)
     try:
         spec = load(args.variables)
+        if "version" in spec["model"]:
+            raise SpecError("[model] version: the version comes from python/csfh/_version.py")
+        spec["model"]["version"] = args.version or package_version()
         epoch = build_epoch(args.epoch)
-    except (SpecError, KeyError, tomllib.TOMLDecodeError) as exc:
+    except (SpecError, KeyError, OSError, tomllib.TOMLDecodeError) as exc:
         print(f"generate.py: {args.variables}: {exc}", file=sys.stderr)
         return 1
     guid = guid_of(spec)

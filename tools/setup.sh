@@ -1,22 +1,113 @@
 #!/usr/bin/env bash
-# Set up csfh on a fresh Debian machine: the system packages it builds with, then the Python
-# package (pip builds the FMU with CMake through scikit-build-core and ships it inside csfh/).
+# Set up csfh on a Debian machine, in three steps:
+#   1. the system packages it builds with (libsundials-dev, CMake, Ninja, a C compiler; libtbb12
+#      for the Ecos engine of the tests), if missing;
+#   2. a virtual environment with Python >= 3.11: .venv in the repository (created if missing);
+#   3. the Python package into it (pip builds the FMU with CMake through scikit-build-core and ships
+#      it inside csfh/); skipped when nothing it is built from has changed since the last install.
+#
+# Usage: tools/setup.sh [--extras LIST] [--venv DIR]
+#   --extras LIST  optional parts, comma-separated: test (pytest, ruff), dask (sweeps on a Dask
+#                  cluster), cosim (the libcosimpy engine), docs (Sphinx), or all (default: none)
+#   --venv DIR     the virtual environment (default: $CSFH_VENV, else .venv); an existing one is
+#                  used as it is
+# Environment: CSFH_PYTHON, the interpreter that creates the environment (default: the first of
+# python3, python3.13, python3.12, python3.11 that is at least 3.11).
+#
+# Afterwards: . .venv/bin/activate (in each new shell), then csfh --help.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+extras=""
+venv="${CSFH_VENV:-.venv}"
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --extras) extras="${2:?--extras needs a list, e.g. test,dask}"; shift 2 ;;
+    --extras=*) extras="${1#--extras=}"; shift ;;
+    --venv) venv="${2:?--venv needs a directory}"; shift 2 ;;
+    --venv=*) venv="${1#--venv=}"; shift ;;
+    -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
+    *) echo "setup: unknown option $1 (tools/setup.sh --help)" >&2; exit 2 ;;
+  esac
+done
+[ "$extras" = "all" ] && extras="test,dask,cosim,docs"
+for extra in ${extras//,/ }; do
+  case "$extra" in
+    test|dask|cosim|docs) ;;
+    *) echo "setup: --extras: unknown extra '$extra' (test, dask, cosim, docs, all)" >&2; exit 2 ;;
+  esac
+done
+
+step() { printf '\nsetup [%s/3] %s  (%ss)\n' "$1" "$2" "$SECONDS"; }
+sudo=""
+[ "$(id -u)" -ne 0 ] && sudo="sudo"
+apt_install() {
+  echo "setup: installing $* (apt-get)"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "$@" >/dev/null
+}
+
+step 1 "system packages: libsundials-dev, cmake, ninja-build, gcc, libtbb12"
 missing=()
 # libtbb12: the Ecos co-simulation engine (ecospy, tests/python/test_registry_importers.py)
 for pkg in libsundials-dev cmake ninja-build gcc libtbb12; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
 done
 if [ ${#missing[@]} -gt 0 ]; then
-  sudo=""
-  [ "$(id -u)" -ne 0 ] && sudo="sudo"
-  echo "setup: installing ${missing[*]}"
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${missing[@]}" >/dev/null
+  apt_install "${missing[@]}"
+else
+  echo "setup: all present"
 fi
 
-python3 -m pip install -q --disable-pip-version-check ".[test,dask,cosim,docs]"
-command -v pyenv >/dev/null 2>&1 && pyenv rehash || true
-echo "setup: csfh $(python3 -c 'import csfh; print(csfh.__version__, csfh.fmu_path())')"
+step 2 "virtual environment $venv (Python >= 3.11)"
+recent_enough() { "$1" -c 'import sys; sys.exit(sys.version_info < (3, 11))' 2>/dev/null; }
+if [ -x "$venv/bin/python" ] && recent_enough "$venv/bin/python"; then
+  echo "setup: using $venv ($("$venv/bin/python" --version))"
+else
+  [ -e "$venv" ] && { echo "setup: $venv exists but has no Python >= 3.11: remove it" >&2; exit 1; }
+  python=""
+  for candidate in ${CSFH_PYTHON:-} python3 python3.13 python3.12 python3.11; do
+    if command -v "$candidate" >/dev/null 2>&1 && recent_enough "$candidate"; then
+      python="$candidate"; break
+    fi
+  done
+  if [ -z "$python" ]; then
+    echo "setup: csfh needs Python >= 3.11; found $(python3 --version 2>&1 || echo 'no python3')." >&2
+    echo "       Install one (Debian 12: apt-get install python3) or name it: CSFH_PYTHON=... $0" >&2
+    exit 1
+  fi
+  if ! "$python" -m venv "$venv" 2>/dev/null; then  # Debian's Python keeps venv apart
+    rm -rf "$venv"
+    apt_install "python$("$python" -c 'import sys; print("%d.%d" % sys.version_info[:2])')-venv"
+    "$python" -m venv "$venv"
+  fi
+  echo "setup: created $venv with $("$venv/bin/python" --version)"
+fi
+vpy="$venv/bin/python"
+
+step 3 "the csfh package${extras:+ with extras $extras} (pip builds the FMU: about a minute)"
+stamp="$venv/.csfh-install-stamp"
+inputs_hash() {
+  {
+    printf '%s\n' "extras=$extras" "$("$vpy" -c 'import sys; print(sys.version)')"
+    find pyproject.toml CMakeLists.txt python fmu_src modelDescription -type f \
+      ! -path '*/__pycache__/*' ! -name '*.pyc' -print0 | LC_ALL=C sort -z | xargs -0 sha256sum
+  } | sha256sum | cut -d' ' -f1
+}
+installed() { env -u PYTHONPATH "$vpy" -c 'import csfh.paths as p; p.fmu_path(); p.core_library_path()' 2>/dev/null; }
+hash="$(inputs_hash)"
+if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$hash" ] && installed; then
+  echo "setup: up to date (nothing csfh is built from has changed since it was installed)"
+else
+  rm -f "$stamp"
+  spec="."
+  [ -n "$extras" ] && spec=".[$extras]"
+  "$vpy" -m pip install --disable-pip-version-check "$spec" 2>&1 \
+    | sed -u '/^Requirement already satisfied/d'
+  echo "$hash" >"$stamp"
+fi
+echo
+echo "setup: done in ${SECONDS}s: $(env -u PYTHONPATH "$vpy" -c 'import csfh, csfh.paths; print("csfh", csfh.__version__, "with", csfh.paths.fmu_path())')"
+if [ "$(cd "$venv" && pwd -P)" != "$(cd "${VIRTUAL_ENV:-/nonexistent}" 2>/dev/null && pwd -P || true)" ]; then
+  echo "setup: activate it in this shell:  . $venv/bin/activate"
+fi

@@ -1,16 +1,28 @@
 #!/usr/bin/env bash
-# Run every test: the C unit tests under AddressSanitizer + UndefinedBehaviorSanitizer (ctest),
-# then the Python tests (pytest, against the installed package's FMU; they run examples/ too), the
-# documentation build (Sphinx, warnings as errors) and the linters.
+# Run every test: the C unit tests under AddressSanitizer + UndefinedBehaviorSanitizer (ctest), the
+# FMI fuzz tests (ASan + UBSan + LeakSanitizer), then the Python tests (pytest, against the
+# package installed in the virtual environment, with its FMU; they run examples/ too), the
+# documentation build (Sphinx, warnings as errors) and the linters. Sets up first
+# (tools/setup.sh, with the extras the tests use; it reinstalls only what changed), in
+# $CSFH_VENV, else .venv.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-tools/setup.sh
+venv="${CSFH_VENV:-.venv}"
+tools/setup.sh --venv "$venv" --extras test,dask,cosim,docs
+# shellcheck disable=SC1091
+. "$venv/bin/activate"
+unset PYTHONPATH  # the tests use the installed package
 
 echo "== C unit tests (ASan + UBSan)"
 cmake -S . -B build-asan -G Ninja -DCSFH_SANITIZE=ON -DCSFH_BUILD_FMU=OFF -DCMAKE_BUILD_TYPE=Debug >/dev/null
 cmake --build build-asan
 ctest --test-dir build-asan --output-on-failure
+
+echo "== FMI fuzz tests of both FMUs (ASan + UBSan + LeakSanitizer, fixed seeds)"
+cmake -S . -B build-fuzz -G Ninja -DCSFH_FUZZ=ON -DCSFH_BUILD_TESTS=OFF -DCSFH_BUILD_BENCHMARKS=OFF >/dev/null
+cmake --build build-fuzz --target csfh_fuzz
+ctest --test-dir build-fuzz -L fuzz --output-on-failure
 
 echo "== FMU build tree"
 cmake -S . -B build -G Ninja -DCSFH_BUILD_TESTS=OFF >/dev/null

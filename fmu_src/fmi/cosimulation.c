@@ -30,6 +30,16 @@
  * instance then holds the last state CVODE reached successfully, at that time (also reported by
  * fmi2GetRealStatus(fmi2LastSuccessfulTime)); fmi2SetFMUstate can roll it back.
  *
+ * Time: CVODE integrates in a local time tau = t - origin, measured from a time origin the
+ * instance holds (the communication point where CVODE was last started from outside: first
+ * step, changed input, state or parameter, FMU state taken or restored; never moved at events).
+ * The integration, its step sizes and its root finding are then the same whatever the start
+ * time: a run from t0 = 1e10 s reproduces the run from 0, shifted, where CVODE in the absolute
+ * time could not resolve its steps (ulp(1e10) = 1.9e-6 s) and drifted. A communication point
+ * maps to tau exactly (t_end - origin, both multiples of ulp(origin) near the origin). CVODE's
+ * own warnings (e.g. "t + h = t" after a very long run) make fmi2DoStep return fmi2Warning;
+ * fmi2DoStep itself (fmi2_glue.c) reports steps that the double time cannot resolve.
+ *
  * A model without continuous states (the comb-drive actuator) just advances its time. */
 #include <float.h>
 #include <limits.h>
@@ -49,7 +59,9 @@
 
 #define NX fmu_model.n_states
 #define MAX_EVENTS_PER_STEP 1000000L  /* guards against an endless chain of events */
-#define MAX_STEPS_PER_CALL 500000L    /* CVODE steps per fmi2DoStep */
+#ifndef MAX_STEPS_PER_CALL
+#define MAX_STEPS_PER_CALL 500000L    /* CVODE steps per fmi2DoStep (the fuzz build lowers it) */
+#endif
 #define AUTO_WINDOW 100L              /* auto: steps per decision */
 #define AUTO_SUSPECT_FAILED 0.05      /* auto: failed fraction of an Adams window that triggers a trial */
 #define AUTO_BDF_COST 1.5             /* auto: cost of a BDF step over an Adams step */
@@ -86,6 +98,8 @@ struct csfh_cvode {
     int peak_n_max;           /* the maxima inside it: times and values */
     double peak_max_t[FMU_MAX_PEAKS];
     double peak_max_v[FMU_MAX_PEAKS][FMU_MAX_PEAKS];
+    double origin;      /* s: CVODE's time 0 (see the top of this file); CVODE's times are local */
+    long warnings;      /* CVODE warnings so far (error_handler) */
 };
 
 static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
@@ -102,6 +116,13 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *gout, void *user_data)
     fmu_instance_t *inst = (fmu_instance_t *)user_data;
     (void)t;
     fmu_model.event_indicators(inst->model, N_VGetArrayPointer(y), gout);
+    for (int i = 0; i < fmu_model.n_event_indicators; i++) {
+        if (!isfinite(gout[i])) {
+            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
+                    "fmi2DoStep: non-finite event indicator z[%d] = %g", i, gout[i]);
+            return 1; /* CVODE fails the step (CV_RTFUNC_FAIL) */
+        }
+    }
     return 0;
 }
 
@@ -112,7 +133,11 @@ static void error_handler(int error_code, const char *module, const char *functi
     if (error_code < 0) {
         fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "%s %s: %s", module, function, msg);
     } else {
-        fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING, "%s %s: %s", module, function, msg);
+        if (inst->cvode != NULL) {
+            inst->cvode->warnings++; /* fmi2DoStep returns fmi2Warning */
+        }
+        fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING, "%s %s (local time from t0 = %.17g): %s",
+                module, function, inst->cvode != NULL ? inst->cvode->origin : 0.0, msg);
     }
 }
 
@@ -190,9 +215,10 @@ static int configured_method(const fmu_instance_t *inst)
     return fmu_model.cs_method != NULL ? fmu_model.cs_method(inst->model) : FMU_CS_BDF;
 }
 
-/* (Re)create CVODE's memory with `method` (FMU_CS_BDF or FMU_CS_ADAMS) at the FMU's time and
- * state; the vectors, the matrix and the solvers are kept from one method to the next. */
-static fmi2Status cv_create(fmu_instance_t *inst, int method)
+/* (Re)create CVODE's memory with `method` (FMU_CS_BDF or FMU_CS_ADAMS) at the local time tau
+ * and the FMU's state; the vectors, the matrix and the solvers are kept from one method to the
+ * next. */
+static fmi2Status cv_create(fmu_instance_t *inst, int method, double tau)
 {
     csfh_cvode_t *cv = inst->cvode;
     if (cv->mem != NULL) {
@@ -214,9 +240,9 @@ static fmi2Status cv_create(fmu_instance_t *inst, int method)
     cv->method = method;
     cv->counted_steps = 0;
     cv->root_pending = 0;
-    start_window(cv, *fmu_time(inst));
+    start_window(cv, tau);
     fmi2Status s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
-    if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, *fmu_time(inst), cv->y), "CVodeInit");
+    if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, tau, cv->y), "CVodeInit");
     if (s == fmi2OK) s = cv_check(inst, CVodeSetUserData(cv->mem, inst), "CVodeSetUserData");
     if (s == fmi2OK) s = cv_check(inst, CVodeSVtolerances(cv->mem, inst->tolerance, cv->abstol), "CVodeSVtolerances");
     if (s == fmi2OK && method == FMU_CS_ADAMS) {
@@ -230,7 +256,7 @@ static fmi2Status cv_create(fmu_instance_t *inst, int method)
 }
 
 /* Create CVODE (first step) or re-initialise it at the current state, with the configured
- * method (auto starts with Adams). */
+ * method (auto starts with Adams); the FMU's time becomes the origin of CVODE's local time. */
 static fmi2Status cs_start(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
@@ -243,8 +269,9 @@ static fmi2Status cs_start(fmu_instance_t *inst)
         memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
         cv->counted_steps = 0;
         cv->root_pending = 0;
-        start_segment(cv, *fmu_time(inst));
-        return cv_check(inst, CVodeReInit(cv->mem, *fmu_time(inst), cv->y), "CVodeReInit");
+        cv->origin = *fmu_time(inst);
+        start_segment(cv, 0.0);
+        return cv_check(inst, CVodeReInit(cv->mem, 0.0, cv->y), "CVodeReInit");
     }
     if (cv == NULL) {
         cv = (csfh_cvode_t *)calloc(1, sizeof(*cv));
@@ -276,12 +303,13 @@ static fmi2Status cs_start(fmu_instance_t *inst)
             }
         }
     }
-    const fmi2Status s = cv_create(inst, method);
+    cv->origin = *fmu_time(inst);
+    const fmi2Status s = cv_create(inst, method, 0.0);
     if (s != fmi2OK) {
         cs_free(inst);
         return s;
     }
-    start_segment(inst->cvode, *fmu_time(inst));
+    start_segment(inst->cvode, 0.0);
     return s;
 }
 
@@ -299,8 +327,8 @@ static long count_steps(fmu_instance_t *inst)
     return added;
 }
 
-/* auto: at the end of each window of AUTO_WINDOW steps, the method for the next window; writes
- * what it decided to `why` (empty when nothing changes). */
+/* auto: at the end of each window of AUTO_WINDOW steps (t: CVODE's local time), the method for
+ * the next window; writes what it decided to `why` (empty when nothing changes). */
 static int auto_choose(csfh_cvode_t *cv, double t, char *why, size_t why_size)
 {
     why[0] = '\0';
@@ -325,7 +353,7 @@ static int auto_choose(csfh_cvode_t *cv, double t, char *why, size_t why_size)
             cv->trial = 1;
             snprintf(why, why_size,
                      "t = %.17g: auto: trying BDF (%.0f %% of Adams' steps failed, mean step %.3g s)",
-                     t, 100.0 * failed, mean_h);
+                     cv->origin + t, 100.0 * failed, mean_h);
             return FMU_CS_BDF;
         }
         return FMU_CS_ADAMS;
@@ -338,13 +366,13 @@ static int auto_choose(csfh_cvode_t *cv, double t, char *why, size_t why_size)
         cv->trial = 0;
         if (mean_h > AUTO_BDF_COST * cv->adams_h) {
             snprintf(why, why_size, "t = %.17g: auto: BDF kept (stiff: mean step %.3g s, Adams %.3g s)",
-                     t, mean_h, cv->adams_h);
+                     cv->origin + t, mean_h, cv->adams_h);
             return FMU_CS_BDF;
         }
         cv->holdoff = cv->next_holdoff;
         cv->next_holdoff = cv->next_holdoff < AUTO_MAX_HOLDOFF ? 2 * cv->next_holdoff : AUTO_MAX_HOLDOFF;
         snprintf(why, why_size, "t = %.17g: auto: back to Adams (BDF's mean step %.3g s, Adams %.3g s)",
-                 t, mean_h, cv->adams_h);
+                 cv->origin + t, mean_h, cv->adams_h);
         return FMU_CS_ADAMS;
     }
     return FMU_CS_BDF;
@@ -497,11 +525,11 @@ static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
     }
 }
 
-/* Take CVODE's solution (tret, y) as the model's time and state. */
+/* Take CVODE's solution (local time tret, y) as the model's time and state. */
 static void take_solution(fmu_instance_t *inst, double tret)
 {
     memcpy(fmu_states(inst), N_VGetArrayPointer(inst->cvode->y), NX * sizeof(double));
-    *fmu_time(inst) = tret;
+    *fmu_time(inst) = inst->cvode->origin + tret;
     fmu_invalidate(inst);
 }
 
@@ -515,21 +543,11 @@ static fmi2Status finish_step(fmu_instance_t *inst, double t_end, fmi2Status sta
     return s > status ? s : status;
 }
 
-fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
+fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
 {
-    const double now = *fmu_time(inst);
-    if (fabs(t - now) > 1e-9 * (1.0 + fabs(t))) {
-        fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
-                "fmi2DoStep: currentCommunicationPoint = %.17g does not match the FMU time %.17g",
-                t, now);
-        return fmi2Error;
-    }
-    if (h == 0.0) {
-        return fmi2OK;
-    }
-    const double t_end = t + h;
+    const double now_abs = *fmu_time(inst);
     if (NX == 0) {
-        return finish_step(inst, t_end, fmi2OK); /* no continuous states: nothing to integrate */
+        return finish_step(inst, t_end_abs, fmi2OK); /* no continuous states: nothing to integrate */
     }
     if (inst->cvode == NULL || inst->cvode_needs_reinit) {
         if (cs_start(inst) != fmi2OK) {
@@ -539,6 +557,10 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
         peaks_forget(inst->cvode); /* a new interpolant */
     }
     csfh_cvode_t *cv = inst->cvode;
+    const long warnings = cv->warnings;
+    /* CVODE's local times (see the top of this file) */
+    const double now = now_abs - cv->origin;
+    const double t_end = t_end_abs - cv->origin;
     const int automatic = configured_method(inst) == FMU_CS_AUTO;
     long events = 0, steps = 0;
     double tret = now;
@@ -598,7 +620,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
                     "fmi2DoStep: the step from t = %.17g to %.17g failed; the FMU holds the last "
                     "successful state, at t = %.17g",
-                    t, t_end, *fmu_time(inst));
+                    now_abs, t_end_abs, *fmu_time(inst));
             inst->cvode_needs_reinit = 1;
             return fmi2Error;
         }
@@ -611,7 +633,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
                     "fmi2DoStep: more than %ld CVODE steps in the step from t = %.17g to %.17g; "
                     "the FMU holds the state at t = %.17g",
-                    MAX_STEPS_PER_CALL, t, t_end, tret);
+                    MAX_STEPS_PER_CALL, now_abs, t_end_abs, *fmu_time(inst));
             inst->cvode_needs_reinit = 1;
             return fmi2Error;
         }
@@ -620,7 +642,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             if (++events > MAX_EVENTS_PER_STEP) {
                 fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
                         "fmi2DoStep: more than %ld events in one step at t = %.17g",
-                        MAX_EVENTS_PER_STEP, tret);
+                        MAX_EVENTS_PER_STEP, *fmu_time(inst));
                 inst->cvode_needs_reinit = 1;
                 return fmi2Error;
             }
@@ -633,7 +655,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
         }
         fmi2Status s = fmi2OK;
         if (restart && automatic && cv->method != FMU_CS_ADAMS) {
-            s = cv_create(inst, FMU_CS_ADAMS);
+            s = cv_create(inst, FMU_CS_ADAMS, tret);
             start_segment(cv, tret);
         } else if (restart) {
             cv->counted_steps = 0;
@@ -649,7 +671,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             if (method == cv->method) {
                 continue;
             }
-            s = cv_create(inst, method);
+            s = cv_create(inst, method, tret);
         } else {
             continue;
         }
@@ -658,7 +680,8 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             return fmi2Error;
         }
     }
-    return finish_step(inst, t_end, fmi2OK);
+    /* CVODE warned (logged by error_handler): the step is done, with a caveat */
+    return finish_step(inst, t_end_abs, cv->warnings > warnings ? fmi2Warning : fmi2OK);
 }
 
 fmi2Status cs_reset(fmu_instance_t *inst)

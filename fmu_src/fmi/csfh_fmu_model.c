@@ -134,6 +134,49 @@ static void peaks_add(void *mv, const double *v)
     }
 }
 
+/* Restored FMU state: the fields that are not stored table variables (checked by the glue:
+ * time, states, inputs, parameters, contact.active/onset_speed/onset_time/release_*) and not
+ * recomputed (d, out, der). */
+static int check_state(const void *mv, char *msg, size_t msg_size)
+{
+    const csfh_model_t *m = (const csfh_model_t *)mv;
+    const struct {
+        const char *name;
+        int value;
+    } counts[] = {{"contact.count", m->z.contact_count},
+                  {"diagnostics.rhs_evaluations", m->counters.rhs},
+                  {"diagnostics.flexure_evaluations", m->counters.flexure},
+                  {"diagnostics.contact_evaluations", m->counters.contact},
+                  {"diagnostics.friction_evaluations", m->counters.friction},
+                  {"diagnostics.integrator_steps", m->counters.steps}};
+    for (size_t i = 0; i < sizeof(counts) / sizeof(counts[0]); i++) {
+        if (counts[i].value < 0) {
+            snprintf(msg, msg_size, "%s = %d is negative", counts[i].name, counts[i].value);
+            return -1;
+        }
+    }
+    if (m->peaks.active != 0 && m->peaks.active != 1) {
+        snprintf(msg, msg_size, "peaks.active = %d is not 0 or 1", m->peaks.active);
+        return -1;
+    }
+    static const char *const peak_names[CSFH_N_PEAKS] = {"contact.F_N_peak", "contact.F_T_peak",
+                                                         "contact.indentation_peak",
+                                                         "flexure.stress_max_peak"};
+    for (int j = 0; j < CSFH_N_PEAKS; j++) {
+        if (!(isfinite(m->peaks.v[j]) && m->peaks.v[j] >= 0.0)) {
+            snprintf(msg, msg_size, "%s (running peak) = %g is not finite and >= 0", peak_names[j],
+                     m->peaks.v[j]);
+            return -1;
+        }
+    }
+    if (m->contact_by_gap != 0) { /* the RK4 baseline's switch: never set in the FMU */
+        snprintf(msg, msg_size, "contact_by_gap = %d (internal switch of the RK4 baseline) is not 0",
+                 m->contact_by_gap);
+        return -1;
+    }
+    return 0;
+}
+
 const fmu_model_t fmu_model = {
     .guid = CSFH_GUID,
     .model_identifier = CSFH_MODEL_IDENTIFIER,
@@ -159,4 +202,5 @@ const fmu_model_t fmu_model = {
     .peaks_begin = peaks_begin,
     .peak_values = peak_values,
     .peaks_add = peaks_add,
+    .check_state = check_state,
 };

@@ -80,6 +80,13 @@ typedef struct {
     void (*peaks_begin)(void *m, int outputs_current);
     int (*peak_values)(void *m, const double *x, double *v);
     void (*peaks_add)(void *m, const double *v);
+    /* A restored FMU state (fmi2SetFMUstate, fmi2DeSerializeFMUstate): check the fields of the
+     * model struct that are neither stored table variables (the glue checks those: finite, in
+     * range) nor recomputed (derived quantities, outputs, derivative cache), e.g. counts that
+     * must be >= 0 and internal flags. 0, or -1 with a message naming the field and its value.
+     * NULL when there are no such fields. Every new field of the model struct must be covered
+     * by one of the three. */
+    int (*check_state)(const void *m, char *msg, size_t msg_size);
 } fmu_model_t;
 
 /* Defined by the model adapter linked into the FMU binary. */

@@ -11,18 +11,61 @@ the Moreau time stepper, comparisons and reports on top.
     >>> driven = csfh.cosimulate(csfh.load_scene("combdrive"))  # with the comb-drive FMU
 
 The model itself is documented in ``docs/model.md``.
+
+The package, by role (each layer imports only the ones below it; tests/python/test_layout.py
+checks it):
+
+* ``csfh.cli``: the command line;
+* ``csfh.studies``: the paper's comparison, accuracy, stress, sweep and tolerance studies, each
+  with its report;
+* ``csfh.cosim``: co-simulation of the hinge with the comb-drive actuator;
+* ``csfh.batch``: many runs of one scene (tasks, result store, executors);
+* ``csfh.runners``: one run of one model (the FMU, Moreau, RK4) -> a `Trajectory`;
+* ``csfh.model``: what the model is (the FMUs' interfaces, presets, scenes, the C core);
+* foundation: ``paths`` (where the binaries are), ``errors``, ``trajectory``, ``output`` (every
+  file written), ``progress``, ``plotting``.
+
+The names below are imported on first use, so that ``import csfh`` (and ``csfh --help``) stays
+fast.
 """
 
 from __future__ import annotations
 
-from ._paths import combdrive_fmu_path, core_library_path, fmu_path
-from .compare import Comparison, compare
-from .cosim import CosimError, cosimulate
-from .fmu_runner import SimulationError
-from .moreau import moreau
-from .results import Trajectory
-from .scene import IntegratorSettings, Scene, SceneError, load_scene, scene_from_dict
-from .simulate import simulate
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from ._version import __version__
+
+if TYPE_CHECKING:
+    from .cosim.coupling import CosimError
+    from .cosim.run import cosimulate
+    from .errors import SceneError, SimulationError
+    from .model.scene import IntegratorSettings, Scene, load_scene, scene_from_dict
+    from .paths import combdrive_fmu_path, core_library_path, fmu_path
+    from .runners.moreau import moreau
+    from .runners.simulate import simulate
+    from .studies.compare import Comparison, compare
+    from .trajectory import Trajectory
+
+_PUBLIC = {
+    "Comparison": "csfh.studies.compare",
+    "CosimError": "csfh.cosim.coupling",
+    "IntegratorSettings": "csfh.model.scene",
+    "Scene": "csfh.model.scene",
+    "SceneError": "csfh.errors",
+    "SimulationError": "csfh.errors",
+    "Trajectory": "csfh.trajectory",
+    "combdrive_fmu_path": "csfh.paths",
+    "compare": "csfh.studies.compare",
+    "core_library_path": "csfh.paths",
+    "cosimulate": "csfh.cosim.run",
+    "fmu_path": "csfh.paths",
+    "load_scene": "csfh.model.scene",
+    "moreau": "csfh.runners.moreau",
+    "scene_from_dict": "csfh.model.scene",
+    "simulate": "csfh.runners.simulate",
+}
+"""Each public name and the module that defines it."""
 
 __all__ = [
     "Comparison",
@@ -32,6 +75,7 @@ __all__ = [
     "SceneError",
     "SimulationError",
     "Trajectory",
+    "__version__",
     "combdrive_fmu_path",
     "compare",
     "core_library_path",
@@ -42,4 +86,16 @@ __all__ = [
     "scene_from_dict",
     "simulate",
 ]
-__version__ = "0.1.0"
+
+
+def __getattr__(name: str) -> Any:
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'csfh' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # next time without __getattr__
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

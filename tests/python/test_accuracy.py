@@ -10,19 +10,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from csfh.accuracy import (
-    QUICK_SETTINGS,
-    _grid,
-    contact_errors,
-    default_horizon,
-    observed_order,
-    run_study,
-)
-from csfh.fmu_runner import simulate_me
-from csfh.moreau import moreau
-from csfh.rk4 import rk4_event
-from csfh.scene import load_scene
-from csfh.stress import effective_restitution, run_suite
+from csfh.model.scene import load_scene
+from csfh.runners.fmu import simulate_me
+from csfh.runners.moreau import moreau
+from csfh.runners.rk4 import rk4_event
+from csfh.studies.accuracy.metrics import contact_errors, observed_order
+from csfh.studies.accuracy.report import write_report
+from csfh.studies.accuracy.study import QUICK_SETTINGS, _grid, default_horizon, run_study
+from csfh.studies.stress.cases import select_cases
+from csfh.studies.stress.oracles import effective_restitution
+from csfh.studies.stress.report import write_report as write_stress_report
+from csfh.studies.stress.suite import run_suite
 
 G, CR = 9.81, 0.9
 
@@ -102,7 +100,8 @@ def test_scaled_impact_oracle_matches_physics_7_3() -> None:
 def test_accuracy_report_quick(tmp_path: Path) -> None:
     scene = load_scene("central")
     settings = {k: v[:2] for k, v in QUICK_SETTINGS.items()}
-    study = run_study(scene, tmp_path, stop_time=0.25, settings=settings, repeats=1)
+    study = run_study(scene, stop_time=0.25, settings=settings, repeats=1)
+    write_report(study, tmp_path)
     for name in ("report.md", "accuracy.json", "wp_LN_spheres.png", "wp_Moreau.png"):
         assert (tmp_path / name).exists(), name
     data = json.loads((tmp_path / "accuracy.json").read_text())
@@ -115,7 +114,9 @@ def test_accuracy_report_quick(tmp_path: Path) -> None:
 
 
 def test_reduced_stress_suite_has_no_failure(tmp_path: Path) -> None:
-    runs = run_suite(tmp_path, quick=True)
+    cases = select_cases(quick=True)
+    runs = run_suite(cases)
+    write_stress_report(cases, runs, tmp_path)
     failures = [(r.case, r.model, r.integrator, r.reason) for r in runs if r.verdict == "fail"]
     assert not failures, failures
     # every documented limit says why

@@ -12,8 +12,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from csfh.cosim import cosimulate
-from csfh.scene import SceneError, load_scene, scene_from_dict
+from csfh.cosim.run import cosimulate
+from csfh.model.scene import SceneError, load_scene, scene_from_dict
 
 
 @pytest.fixture

@@ -27,8 +27,8 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from fmpy.model_description import ModelDescription
 
-from csfh.fmu_runner import simulate_cs, simulate_me
-from csfh.scene import Scene, load_scene
+from csfh.model.scene import Scene, load_scene
+from csfh.runners.fmu import simulate_cs, simulate_me
 
 MakeFmu = Callable[..., tuple[Any, Any]]
 

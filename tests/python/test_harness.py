@@ -12,10 +12,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from csfh.core import CoreModel
-from csfh.fmu_runner import simulate_me
-from csfh.moreau import core_model, moreau
-from csfh.scene import SceneError, load_scene, scene_from_dict
+from csfh.model.core import CoreModel
+from csfh.model.instance import core_model
+from csfh.model.scene import SceneError, load_scene, scene_from_dict
+from csfh.runners.fmu import simulate_me
+from csfh.runners.moreau import moreau
 
 G = 9.81
 CR = 0.9
@@ -204,7 +205,7 @@ def test_first_rebound_matches_physics_7_3(
 def test_switched_off_parts_are_never_evaluated(interface: str) -> None:
     """A scene runs only what it needs: flexure/friction off means never evaluated (counters of
     the FMU and of the core library); on means evaluated."""
-    from csfh.simulate import simulate
+    from csfh.runners.simulate import simulate
 
     off = load_scene("central").with_parameters()  # no flexure, no friction
     for model in ("LN_spheres", "Moreau"):
@@ -219,7 +220,7 @@ def test_switched_off_parts_are_never_evaluated(interface: str) -> None:
 
 def test_me_driver_agrees_with_fmpy_simulate_fmu() -> None:
     """Our one-step model-exchange driver and fmpy.simulate_fmu give the same trajectory."""
-    from csfh.fmu_runner import simulate_fmpy
+    from csfh.runners.fmu import simulate_fmpy
 
     scene = load_scene("asymmetric")
     ours = simulate_me(scene, "LN_spheres", rtol=1e-9, stop_time=0.2)
@@ -245,6 +246,55 @@ def test_builtin_scenes() -> None:
     assert central.q0 == (0.0, 0.01, 0.0) and not central.flexure and not central.friction
     assert asym.q0 == (0.01, 0.01, 0.0) and not asym.flexure and asym.friction
     assert full.q0 == (0.01, 0.01, 0.0) and full.flexure and full.friction
+
+
+def test_the_scene_example_in_the_documentation_is_a_valid_scene() -> None:
+    """The example scene in csfh.model.scene's docstring parses and loads as documented."""
+    import textwrap
+    import tomllib
+
+    import csfh.model.scene as scene_module
+
+    doc = str(scene_module.__doc__)
+    example = textwrap.dedent(doc[doc.index("    name = ") :])
+    data = tomllib.loads(example)
+    scene = scene_from_dict(data, "docstring")
+    assert scene.models == ("LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau")
+    assert scene.integrator.stick_rule == "paper" and scene.parameters == {"contact.cr": 0.9}
+    assert scene.q0 == (0.01, 0.01, 0.0) and scene.inputs == {"F_ext[1]": 0.0}
+
+
+def test_the_scene_example_of_the_user_guide_is_a_valid_scene() -> None:
+    import tomllib
+
+    text = (Path(__file__).resolve().parents[2] / "docs/guide/harness.md").read_text()
+    example = text.split("```toml\n", 1)[1].split("```", 1)[0]
+    scene = scene_from_dict(tomllib.loads(example), "guide")
+    assert scene.name == "my_drop" and scene.models == (
+        "LN_spheres",
+        "LN_cylinders",
+        "LN_ESDU",
+        "Moreau",
+    )
+
+
+@pytest.mark.parametrize("entry", ["simulate", "moreau"])
+def test_public_runners_take_a_scene_name_or_file(entry: str, tmp_path: Path) -> None:
+    """csfh.simulate / csfh.moreau accept what csfh.load_scene accepts (as the CLI does)."""
+    import csfh
+
+    by_object = csfh.simulate(load_scene("central"), "LN_ESDU", stop_time=0.1)
+    if entry == "simulate":
+        by_name = csfh.simulate("central", "LN_ESDU", stop_time=0.1)
+    else:
+        by_object = csfh.moreau(load_scene("central"), stop_time=0.1)
+        by_name = csfh.moreau("central", stop_time=0.1)
+    path = tmp_path / "mine.toml"
+    path.write_text('name = "mine"\nstop_time = 0.1\n[initial]\nq = [0.0, 0.01, 0.0]\n')
+    by_file = csfh.simulate(path, "LN_ESDU") if entry == "simulate" else csfh.moreau(str(path))
+    assert by_name.scene == "central" and by_file.scene == "mine"
+    np.testing.assert_array_equal(by_name["y"], by_object["y"])
+    assert by_file.t[-1] == pytest.approx(0.1)
 
 
 def test_consistent_preset_values() -> None:
@@ -350,7 +400,7 @@ def test_compare_writes_everything(tmp_path: Path) -> None:
             "parts": {"flexure": True, "friction": True},
         }
     )
-    from csfh.compare import compare
+    from csfh.studies.compare import compare
 
     result = compare(scene, tmp_path)
     names = {p.name for p in result.files}

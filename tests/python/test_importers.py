@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from csfh.fmu_runner import STATE_NAMES, simulate_me
-from csfh.scene import Scene, load_scene
+from csfh.model.scene import Scene, load_scene
+from csfh.runners.fmu import STATE_NAMES, simulate_me
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ("central", "asymmetric", "csfh")
@@ -138,15 +138,29 @@ def test_me_cvode_importer_matches_fmpy(
     switches, mode `flags` failed: CVODE's error test at t = 0.072-0.137 s.)"""
     scene = load_scene(scene_name)
     run = run_importer(
-        "me_cvode", unzipped, scene, tmp_path, "--mode", mode, "--rtol", "1e-10",
-        "--interval", "1e-3", "--stop", str(scene.stop_time),
+        "me_cvode",
+        unzipped,
+        scene,
+        tmp_path,
+        "--mode",
+        mode,
+        "--rtol",
+        "1e-10",
+        "--interval",
+        "1e-3",
+        "--stop",
+        str(scene.stop_time),
     )
     ref = reference(scene_name)
     rows, ref_rows = run.grid(), reference_grid(ref)
     np.testing.assert_allclose(run.table["time"][rows], ref.table["t"][ref_rows], atol=1e-12)
     peak = float(np.max(ref.table["F_N"]))
-    for name, tol in (("body1.x", 5e-8), ("body1.y", 5e-8), ("body1.vy", 2e-4),
-                      ("contact.F_N", 2e-4 * peak)):
+    for name, tol in (
+        ("body1.x", 5e-8),
+        ("body1.y", 5e-8),
+        ("body1.vy", 2e-4),
+        ("contact.F_N", 2e-4 * peak),
+    ):
         error = np.max(np.abs(run.table[name][rows] - ref.table[COLUMN[name]][ref_rows]))
         assert error <= tol, (name, error)
     # every onset and release, at the same instants
@@ -201,9 +215,20 @@ def test_cs_master_with_variable_steps_and_rollback(
     replayed from the saved state with bitwise the same outputs (checked by the master)."""
     scene = load_scene(scene_name)
     run = run_importer(
-        "cs_master", unzipped, scene, tmp_path, "--rtol", "1e-10", "--step", "1e-2",
-        "--watch", "contact.count", "--stop", str(scene.stop_time),
-        "--mode", "serialize" if serialize else "memory",
+        "cs_master",
+        unzipped,
+        scene,
+        tmp_path,
+        "--rtol",
+        "1e-10",
+        "--step",
+        "1e-2",
+        "--watch",
+        "contact.count",
+        "--stop",
+        str(scene.stop_time),
+        "--mode",
+        "serialize" if serialize else "memory",
     )
     assert run.value("rollbacks") >= 50  # contacts refined, and the replays
     steps = np.diff(run.table["time"])
@@ -212,7 +237,11 @@ def test_cs_master_with_variable_steps_and_rollback(
     rows = np.isin(ref.table["t"], run.table["time"])
     np.testing.assert_array_equal(ref.table["t"][rows], run.table["time"])
     peak = float(np.max(ref.table["F_N"]))
-    for name, tol in (("body1.x", 5e-8), ("body1.y", 5e-8), ("body1.vy", 2e-4),
-                      ("contact.F_N", 2e-4 * peak)):
+    for name, tol in (
+        ("body1.x", 5e-8),
+        ("body1.y", 5e-8),
+        ("body1.vy", 2e-4),
+        ("contact.F_N", 2e-4 * peak),
+    ):
         error = np.max(np.abs(run.table[name] - ref.table[COLUMN[name]][rows]))
         assert error <= tol, (name, error)

@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from csfh.fmu_runner import simulate_me
-from csfh.scene import load_scene
+from csfh.model.scene import load_scene
+from csfh.runners.fmu import simulate_me
 
 STEP, STOP, LAW, LAW_NUMBER = 1e-3, 0.2, "LN_cylinders", 3
 
@@ -41,7 +41,7 @@ def test_libcosim(fmu_path) -> None:
     from libcosimpy.CosimObserver import CosimObserver
     from libcosimpy.CosimSlave import CosimLocalSlave
 
-    log_output_level(CosimLogLevel.FATAL)  # fmi-library#21: see csfh.cosim
+    log_output_level(CosimLogLevel.FATAL)  # fmi-library#21: see csfh.cosim.libcosim_master
     ex = CosimExecution.from_step_size(round(STEP * 1e9))
     slave = ex.add_local_slave(CosimLocalSlave(fmu_path=str(fmu_path), instance_name="hinge"))
     assert slave >= 0

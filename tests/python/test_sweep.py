@@ -11,13 +11,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from csfh.cli import main
-from csfh.moreau import moreau
-from csfh.moreau_batch import moreau_batch
-from csfh.scene import load_scene
-from csfh.sweep import MeasureSettings, SweepSpec, compare_with_paper, influence, sweep_tasks
-from csfh.tasks import ResultStore, Task, interval_peaks, run_tasks
-from csfh.tolerance import load_study, sample
+from csfh.batch.executors import run_tasks
+from csfh.batch.store import ResultStore
+from csfh.batch.tasks import Task, interval_peaks
+from csfh.cli.main import main
+from csfh.model.scene import load_scene
+from csfh.runners.moreau import moreau
+from csfh.runners.moreau_batch import moreau_batch
+from csfh.studies.sweep.analysis import compare_with_paper
+from csfh.studies.sweep.influence import MeasureSettings, influence
+from csfh.studies.sweep.spec import SweepSpec, sweep_tasks
+from csfh.studies.tolerance.study import load_study, sample
 
 T = np.arange(10001) * 1e-4  # 1 s on the sweep's grid
 

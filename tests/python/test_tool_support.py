@@ -69,8 +69,8 @@ def test_every_contact_mode_switch_asks_the_importer_to_restart(
 def csfh_reference():
     """The harness's model-exchange run of the csfh scene (the FMU's start values) at rtol 1e-10:
     per contact, the peak F_N and indentation refined on CVODE's interpolant."""
-    from csfh.fmu_runner import simulate_me
-    from csfh.scene import load_scene
+    from csfh.model.scene import load_scene
+    from csfh.runners.fmu import simulate_me
 
     return simulate_me(load_scene("csfh"), "LN_spheres", rtol=1e-10, output_interval=1e-3)
 
@@ -99,8 +99,10 @@ def test_bare_co_simulation_reports_the_peaks(
         inside = (cr["t_onset"] > t[k - 1]) & (cr["t_onset"] <= t[k])
         if not inside.any() or not np.all(cr["t_release"][inside] <= t[k]):
             continue  # no contact, or one that goes on into the next step
-        for name, field in (("contact.F_N_peak", "peak_F_N"),
-                            ("contact.indentation_peak", "max_indentation")):
+        for name, field in (
+            ("contact.F_N_peak", "peak_F_N"),
+            ("contact.indentation_peak", "max_indentation"),
+        ):
             expected = float(np.max(cr[field][inside]))
             assert r[name][k] == pytest.approx(expected, rel=tol), (name, t[k])
         checked += 1
@@ -124,8 +126,10 @@ def test_peaks_are_the_instantaneous_values_without_a_communication_step(
         fmu.setupExperiment(startTime=0.0)
         fmu.enterInitializationMode()
         # in contact from the start, sliding: F_N, F_T and the indentation are all > 0
-        fmu.setReal([vr["body1.x"], vr["body1.y"], vr["body1.vx"], vr["body1.vy"]],
-                     [0.0, -0.02 - 5e-5, 0.3, -0.1])
+        fmu.setReal(
+            [vr["body1.x"], vr["body1.y"], vr["body1.vx"], vr["body1.vy"]],
+            [0.0, -0.02 - 5e-5, 0.3, -0.1],
+        )
         fmu.exitInitializationMode()
         F_N, F_T, rho = fmu.getReal(now)
         assert F_N > 0 and F_T != 0 and rho > 0
@@ -170,7 +174,7 @@ def test_scene_loader_refuses_a_deep_start(tmp_path) -> None:
     import subprocess
     import sys
 
-    from csfh.scene import SceneError, scene_from_dict
+    from csfh.model.scene import SceneError, scene_from_dict
 
     with pytest.raises(SceneError) as info:
         scene_from_dict({"name": "deep", "initial": {"q": [0.05, 0.0, 0.0]}})
@@ -178,18 +182,27 @@ def test_scene_loader_refuses_a_deep_start(tmp_path) -> None:
     assert "0.03 m deep" in str(info.value) and "contact.max_initial_indentation" in str(info.value)
     path = tmp_path / "huge.toml"
     path.write_text('name = "huge"\n[initial]\nq = [1e10, 0.0, 0.0]\n')
-    r = subprocess.run([sys.executable, "-m", "csfh", "run", str(path), "--law", "LN_spheres"],
-                       capture_output=True, text=True, timeout=120)
+    r = subprocess.run(
+        [sys.executable, "-m", "csfh", "run", str(path), "--law", "LN_spheres"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "deep in the bore" in r.stderr
     # an override of the limit lets the scene through
-    scene_from_dict({"name": "deep", "initial": {"q": [0.05, 0.0, 0.0]},
-                     "parameters": {"contact.max_initial_indentation": 0.04}})
+    scene_from_dict(
+        {
+            "name": "deep",
+            "initial": {"q": [0.05, 0.0, 0.0]},
+            "parameters": {"contact.max_initial_indentation": 0.04},
+        }
+    )
 
 
 def test_model_exchange_runner_has_a_step_budget() -> None:
-    from csfh.fmu_runner import SimulationError, simulate_me
-    from csfh.scene import load_scene
+    from csfh.model.scene import load_scene
+    from csfh.runners.fmu import SimulationError, simulate_me
 
     with pytest.raises(SimulationError, match="step budget"):
         simulate_me(load_scene("central"), "LN_spheres", max_steps=200)
@@ -218,10 +231,15 @@ def test_output_nominals_match_their_magnitude(fmu_path, model_description) -> N
     import fmpy
     import numpy as np
 
-    outputs = [v for v in model_description.modelVariables
-               if v.type == "Real" and v.causality == "output"]
-    r = fmpy.simulate_fmu(str(fmu_path), fmi_type="CoSimulation", output_interval=1e-4,
-                          output=[v.name for v in outputs])
+    outputs = [
+        v for v in model_description.modelVariables if v.type == "Real" and v.causality == "output"
+    ]
+    r = fmpy.simulate_fmu(
+        str(fmu_path),
+        fmi_type="CoSimulation",
+        output_interval=1e-4,
+        output=[v.name for v in outputs],
+    )
     for v in outputs:
         largest = float(np.max(np.abs(r[v.name])))
         nominal = float(v.nominal) if v.nominal is not None else 1.0
@@ -270,9 +288,16 @@ def test_generation_date_is_reproducible(tmp_path, model_description) -> None:
     for k in range(2):
         out = tmp_path / f"gen{k}"
         env = {**os.environ, "SOURCE_DATE_EPOCH": "1700000000"}
-        subprocess.run([sys.executable, str(root / "modelDescription" / "generate.py"),
-                        str(root / "modelDescription" / "variables.toml"), str(out)],
-                       check=True, env=env)
+        subprocess.run(
+            [
+                sys.executable,
+                str(root / "modelDescription" / "generate.py"),
+                str(root / "modelDescription" / "variables.toml"),
+                str(out),
+            ],
+            check=True,
+            env=env,
+        )
         texts.append((out / "modelDescription.xml").read_text())
     assert texts[0] == texts[1]
     assert 'generationDateAndTime="2023-11-14T22:13:20Z"' in texts[0]
@@ -281,10 +306,14 @@ def test_generation_date_is_reproducible(tmp_path, model_description) -> None:
     datetime.datetime.strptime(stamp, "%Y-%m-%dT%H:%M:%SZ")
 
 
-@pytest.mark.parametrize(("enum", "number", "value"),
-                         [("contact.law", "contact.law_number", 3),
-                          ("contact.esdu_reading", "contact.esdu_reading_number", 2),
-                          ("solver.method", "solver.method_number", 3)])
+@pytest.mark.parametrize(
+    ("enum", "number", "value"),
+    [
+        ("contact.law", "contact.law_number", 3),
+        ("contact.esdu_reading", "contact.esdu_reading_number", 2),
+        ("solver.method", "solver.method_number", 3),
+    ],
+)
 def test_enumerations_can_be_chosen_as_integers(
     make_fmu: MakeFmu, vr: dict[str, int], enum: str, number: str, value: int
 ) -> None:

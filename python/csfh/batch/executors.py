@@ -1,0 +1,170 @@
+"""Executors of batched runs, with bitwise-identical results: serial in this process, local
+processes, or a Dask distributed cluster. Each computes the tasks not yet in the store (chunks of
+`csfh.batch.tasks.run_chunk`) and adds every result as it completes."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import multiprocessing
+import os
+import time
+from collections.abc import Callable, Iterable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from typing import Any
+
+from ..progress import Progress
+from .store import ResultStore
+from .tasks import Result, Task, run_chunk, scene_fingerprint, worker_init
+
+
+def default_workers() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def make_chunks(tasks: Sequence[Task], workers: int, batch: int = 64) -> list[list[Task]]:
+    """Moreau tasks grouped by scene and settings into batches (at most `batch`, and small
+    enough to keep every worker busy); event-driven tasks one per chunk. Deterministic."""
+    groups: dict[tuple[Any, ...], list[Task]] = {}
+    chunks: list[list[Task]] = []
+    for t in tasks:
+        if t.model == "Moreau":
+            gk = (
+                json.dumps(scene_fingerprint(t.scene), sort_keys=True),
+                t.stop_time,
+                t.output_interval,
+                t.signals,
+            )
+            groups.setdefault(gk, []).append(t)
+        else:
+            chunks.append([t])
+    for group in groups.values():
+        size = max(1, min(batch, math.ceil(len(group) / max(1, workers))))
+        chunks += [group[i : i + size] for i in range(0, len(group), size)]
+    return chunks
+
+
+@dataclass
+class RunReport:
+    total: int
+    reused: int
+    computed: int
+    wall_time: float
+    executor: str
+
+
+def run_tasks(
+    tasks: Sequence[Task],
+    store: ResultStore,
+    *,
+    workers: int | None = None,
+    dask_address: str | None = None,
+    label: str = "tasks",
+    quiet: bool = False,
+    batch: int = 64,
+    on_result: Callable[[int, int], None] | None = None,
+) -> RunReport:
+    """Compute the tasks not yet in `store` and add their results as they complete. workers=1
+    runs serially in this process; more uses that many local processes (default: all cores);
+    dask_address sends the chunks to a Dask distributed scheduler. Ctrl-C (KeyboardInterrupt)
+    propagates after pending work is cancelled; everything finished so far is in the store."""
+    unique: dict[str, Task] = {}
+    for t in tasks:
+        unique.setdefault(t.key, t)
+    pending = [t for k, t in unique.items() if k not in store]
+    reused = len(unique) - len(pending)
+    n_workers = default_workers() if workers is None else max(1, workers)
+    chunks = make_chunks(pending, n_workers if dask_address is None else max(n_workers, 8), batch)
+    by_key = {t.key: t for t in pending}
+    progress = Progress(label, quiet=quiet, total=len(pending))
+    done = 0
+    wall = time.perf_counter()
+
+    def accept(results: Iterable[Result]) -> None:
+        nonlocal done
+        batch = [(by_key[key], summary, sig, wall) for key, summary, sig, wall in results]
+        store.add_many(batch)
+        done += len(batch)
+        progress.update(done)
+        if on_result is not None:
+            on_result(done, len(pending))
+
+    try:
+        if not chunks:
+            executor = "none (all reused)"
+        elif dask_address is not None:
+            executor = f"dask {dask_address}"
+            _run_dask(chunks, dask_address, accept)
+        elif n_workers == 1 or len(chunks) == 1:
+            executor = "serial"
+            for chunk in chunks:
+                accept(run_chunk(chunk))
+        else:
+            executor = f"{n_workers} local processes"
+            _run_processes(chunks, n_workers, accept)
+    finally:
+        progress.close()
+    return RunReport(
+        total=len(unique),
+        reused=reused,
+        computed=done,
+        wall_time=time.perf_counter() - wall,
+        executor=executor,
+    )
+
+
+def _run_processes(
+    chunks: list[list[Task]], workers: int, accept: Callable[[Iterable[Result]], None]
+) -> None:
+    ctx = multiprocessing.get_context("spawn")
+    pool = ProcessPoolExecutor(
+        max_workers=min(workers, len(chunks)), mp_context=ctx, initializer=worker_init
+    )
+    futures: set[Future[list[Result]]] = set()
+    try:
+        # largest chunks first (Moreau batches, then runs), a bounded number in flight
+        queue = sorted(chunks, key=len)
+        while queue or futures:
+            while queue and len(futures) < 2 * workers:
+                futures.add(pool.submit(run_chunk, queue.pop()))
+            finished, futures = wait(futures, return_when=FIRST_COMPLETED)
+            for fut in finished:
+                accept(fut.result())
+    except BaseException:
+        for fut in futures:
+            fut.cancel()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _run_dask(
+    chunks: list[list[Task]], address: str, accept: Callable[[Iterable[Result]], None]
+) -> None:
+    try:
+        from distributed import Client, as_completed
+    except ImportError as exc:  # pragma: no cover - depends on the installation
+        raise RuntimeError(
+            "--dask needs dask.distributed: pip install 'dask[distributed]'"
+        ) from exc
+    try:
+        client = Client(address, timeout="10s")
+    except OSError as exc:
+        raise OSError(f"cannot connect to the Dask scheduler at {address}: {exc}") from None
+    futures = []
+    try:
+        for chunk in chunks:
+            ckey = hashlib.sha256("".join(t.key for t in chunk).encode()).hexdigest()[:16]
+            futures.append(client.submit(run_chunk, chunk, key=f"csfh-chunk-{ckey}", pure=False))
+        for fut in as_completed(futures):
+            accept(fut.result())
+    except BaseException:
+        client.cancel(futures)
+        raise
+    finally:
+        client.close()

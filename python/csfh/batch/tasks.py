@@ -1,0 +1,223 @@
+"""Many runs of one scene, as tasks. A task is one model run of a scene with parameter overrides.
+Its key is a hash of everything that determines the result (the scene's physics and integrator
+settings, the model, the overrides, the horizon, the output grid, the FMU interface, the
+binaries), so a re-run with the same output directory skips the tasks already done (see
+`csfh.batch.store`), and the executor never matters (`csfh.batch.executors`): every task is
+computed by the same function, `run_chunk`, from the same inputs, in whichever process.
+
+Moreau tasks of the same scene and settings are grouped into chunks and run as one batch in the C
+core (csfh.runners.moreau_batch); event-driven tasks run through the FMU one at a time."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import signal
+import threading
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from functools import cache, cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..model.scene import Scene
+
+SCHEMA = 2  # 2: forces of the event-driven runs as interval peaks
+SIGNALS = ("x", "y", "theta", "F_N", "F_T")
+"""Output signals kept on the grid for sweeps (m, m, rad, N, N). x, y, theta are the values at
+the grid points; F_N and F_T the value of largest magnitude in each output interval (t_k-1, t_k]
+(event-driven: over every integrator step; Moreau: the step with the largest impulse), so that an
+impact peak does not depend on where the grid happens to cut it."""
+_FMU_LOCK = threading.Lock()  # fmpy instances in one process: one run at a time (Dask threads)
+
+
+@dataclass(frozen=True)
+class Task:
+    """One model run: `scene` with `parameters` overridden, up to `stop_time`, outputs on a grid
+    of `output_interval` (kept only if `signals`)."""
+
+    scene: Scene
+    model: str
+    parameters: tuple[tuple[str, float], ...] = ()
+    stop_time: float = 1.0
+    output_interval: float = 1e-4
+    interface: str = "me"
+    signals: bool = True
+    meta: tuple[tuple[str, Any], ...] = field(default=(), compare=False)
+    binaries: str = field(default_factory=lambda: binaries_fingerprint())
+
+    @cached_property
+    def key(self) -> str:
+        return task_key(self)
+
+    def overrides(self) -> dict[str, float]:
+        return dict(self.parameters)
+
+
+def scene_fingerprint(scene: Scene) -> dict[str, Any]:
+    """Everything of a scene that can change a result (not its name, description or source)."""
+    data = asdict(scene)
+    for k in ("name", "description", "source", "models"):
+        data.pop(k, None)
+    return json.loads(json.dumps(data, sort_keys=True, default=list))
+
+
+@cache
+def binaries_fingerprint() -> str:
+    """Hash of the FMU and the core library in use: a rebuilt model invalidates old results."""
+    from ..paths import core_library_path, fmu_path
+
+    h = hashlib.sha256()
+    for path in (fmu_path(), core_library_path()):
+        h.update(Path(path).read_bytes())
+    return h.hexdigest()[:16]
+
+
+def task_key(task: Task) -> str:
+    spec = {
+        "schema": SCHEMA,
+        "binaries": task.binaries,
+        "scene": scene_fingerprint(task.scene),
+        "model": task.model,
+        "parameters": sorted([k, float(v)] for k, v in task.parameters),
+        "stop_time": float(task.stop_time),
+        "output_interval": float(task.output_interval),
+        "interface": task.interface if task.model != "Moreau" else "core",
+        "signals": task.signals,
+    }
+    text = json.dumps(spec, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def grid(stop_time: float, output_interval: float) -> np.ndarray:
+    n = round(stop_time / output_interval)
+    return np.arange(n + 1) * output_interval
+
+
+def interval_peaks(g: np.ndarray, at_grid: np.ndarray, t: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Per grid point k, the sample of largest magnitude among the grid value and every sample
+    (t, f) with g[k-1] < t <= g[k]."""
+    k = np.searchsorted(g, t, side="left")
+    inside = (k >= 1) & (k < len(g))
+    hi, lo = at_grid.copy(), at_grid.copy()
+    np.maximum.at(hi, k[inside], f[inside])
+    np.minimum.at(lo, k[inside], f[inside])
+    return np.where(np.abs(lo) > np.abs(hi), lo, hi)
+
+
+# ------------------------------------------------------------------------------------------
+# running tasks (in any process)
+
+Result = tuple[str, dict[str, Any], dict[str, np.ndarray] | None, float]
+"""(task key, summary, signals or None, wall time in s). The wall time is kept apart: it is the
+only part of a result that depends on where and when the task ran."""
+
+
+def _summary(
+    first: float | None, contacts: int, peak_fn: float, peak_ft: float, steps: int
+) -> dict[str, Any]:
+    return {
+        "first_contact": first,
+        "contacts": int(contacts),
+        "peak_F_N": float(peak_fn),
+        "peak_abs_F_T": float(peak_ft),
+        "steps": int(steps),
+    }
+
+
+def _run_fmu(task: Task) -> Result:
+    from ..runners.fmu import simulate_cs, simulate_me
+
+    with _FMU_LOCK:
+        wall = time.perf_counter()
+        if task.interface == "cs":
+            tr = simulate_cs(
+                task.scene,
+                task.model,
+                stop_time=task.stop_time,
+                communication_step=task.output_interval,
+                parameters=task.overrides(),
+            )
+        else:
+            tr = simulate_me(
+                task.scene,
+                task.model,
+                stop_time=task.stop_time,
+                output_interval=task.output_interval,
+                parameters=task.overrides(),
+                max_step_records=1_000_000,
+            )
+        wall = time.perf_counter() - wall
+    s = tr.summary()
+    summary = _summary(
+        s["first_contact_time"], s["contacts"], s["max_F_N"], s["max_abs_F_T"], s["steps"]
+    )
+    sig = None
+    if task.signals:
+        g = grid(task.stop_time, task.output_interval)
+        sig = {name: np.interp(g, tr.t, tr[name]) for name in SIGNALS}
+        for name in ("F_N", "F_T"):
+            t_all = np.concatenate([tr.t, tr.steps["t"]]) if tr.steps else tr.t
+            f_all = np.concatenate([tr[name], tr.steps[name]]) if tr.steps else tr[name]
+            sig[name] = interval_peaks(g, sig[name], t_all, f_all)
+    return task.key, summary, sig, wall
+
+
+def _run_moreau(tasks: Sequence[Task]) -> list[Result]:
+    from ..runners.moreau_batch import moreau_batch
+
+    first = tasks[0]
+    batch = moreau_batch(
+        first.scene,
+        [t.overrides() for t in tasks],
+        stop_time=first.stop_time,
+        output_interval=first.output_interval,
+    )
+    if np.any(batch.status != 0):
+        bad = int(np.flatnonzero(batch.status != 0)[0])
+        raise FloatingPointError(
+            f"Moreau: non-finite state for parameters {tasks[bad].overrides()}; reduce h"
+        )
+    wall = batch.wall_time / len(tasks)
+    out: list[Result] = []
+    g = grid(first.stop_time, first.output_interval) if first.signals else None
+    for i, task in enumerate(tasks):
+        t_imp = batch.impact_times(i)
+        F_N, F_T = batch.column(i, "F_N"), batch.column(i, "F_T")
+        summary = _summary(
+            float(t_imp[0]) if len(t_imp) else None,
+            int(batch.stats[i, 5]),
+            float(np.max(F_N)),
+            float(np.max(np.abs(F_T))),
+            int(batch.stats[i, 0]),
+        )
+        sig = None
+        if g is not None:
+            t = batch.column(i, "t")
+            sig = {name: np.interp(g, t, batch.column(i, name)) for name in SIGNALS}
+        out.append((task.key, summary, sig, wall))
+    return out
+
+
+def run_chunk(tasks: Sequence[Task]) -> list[Result]:
+    """Run a chunk: Moreau tasks of one scene and settings as one batch, anything else one by
+    one. This is the only function that computes results, whatever the executor."""
+    if not tasks:
+        return []
+    here = binaries_fingerprint()
+    if any(t.binaries != here for t in tasks):
+        raise RuntimeError(
+            f"this worker's csfh binaries ({here}) are not the submitter's "
+            f"({tasks[0].binaries}): install the same csfh build on every worker"
+        )
+    if tasks[0].model == "Moreau":
+        return _run_moreau(tasks)
+    return [_run_fmu(t) for t in tasks]
+
+
+def worker_init() -> None:
+    # Ctrl-C goes to the whole process group: let the parent decide (it keeps what is done)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)

@@ -1,0 +1,105 @@
+"""Co-simulation of the CSFH FMU with the comb-drive actuator FMU (`combdrive.fmu`): the coupled
+system and its result table. Two engines run it: a master loop over fmpy's FMU2Slave
+(`fmpy_master`) and libcosim, the Open Simulation Platform engine, through libcosimpy
+(`libcosim_master`); `run.cosimulate` chooses. The scene's [cosim] section is described in
+`csfh.model.cosim_section`.
+
+The coupling (the same in both engines):
+
+    V(t) (voltage ramp of the scene)  -> combdrive.V
+    combdrive.F_x                     -> csfh.F_ext[1]
+    combdrive.F_y                     -> csfh.F_ext[2]
+    combdrive.M                       -> csfh.M_ext          (moment = true)
+    csfh.body1.theta                  -> combdrive.theta     (moment = true)
+
+Ordering. Both FMUs advance with a fixed communication step h; inputs are held constant over a
+step (zero-order hold; the csfh FMU restarts CVODE when an input changes).
+
+* Jacobi (default): every FMU steps from t_k to t_k+1 with the inputs it holds at t_k; outputs are
+  exchanged after all have stepped. This is libcosim's fixed-step algorithm, so the two engines
+  compute the same thing and agree to round-off (tests/python/test_cosim.py). The actuator is
+  algebraic (direct feedthrough), so the hinge sees during [t_k, t_k+1] the force of V(t_k-1),
+  theta(t_k-1): one communication step of delay.
+* Gauss-Seidel (fmpy engine only): at t_k the actuator is evaluated first, with V(t_k) and the
+  current theta(t_k), and its force acts on the hinge over the same step: no delay. There is no
+  algebraic loop to solve: theta is a state of the hinge (no direct feedthrough).
+
+The voltage is set by the master before each step (libcosim: an override manipulator), V(t_k).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import SimulationError
+from ..model.cosim_section import DEFAULT_TOLERANCE, CosimSettings
+from ..model.scene import Scene
+from ..output import write_table
+from ..runners.fmu import OUTPUT_NAMES, STATE_NAMES
+from ..trajectory import UNITS, Trajectory
+
+ACTUATOR_COLUMNS = {"F": "F_act", "F_x": "F_x", "F_y": "F_y", "M": "M"}
+"""Actuator output -> column of the result table."""
+COSIM_UNITS = {"V": "V", "F_act": "N", "F_x": "N", "F_y": "N", "M": "N m"}
+
+
+class CosimError(SimulationError):
+    """The co-simulation failed; the message says which FMU or engine and why (the CLI reports it
+    on one line, like every SimulationError)."""
+
+
+def csfh_start_values(scene: Scene) -> dict[str, Any]:
+    """Parameters (preset, parts, overrides; the scene's contact law), initial state, inputs."""
+    values: dict[str, Any] = dict(scene.parameter_values(None))
+    values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
+    values.update(scene.inputs)
+    return values
+
+
+# ------------------------------------------------------------------------------------------
+# results
+
+
+class Rows:
+    """Growing table of output rows."""
+
+    def __init__(self, names: tuple[str, ...]) -> None:
+        self.names = names
+        self.rows: list[list[float]] = []
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        data = np.array(self.rows, dtype=float).reshape(-1, len(self.names))
+        return {n: data[:, i].copy() for i, n in enumerate(self.names)}
+
+
+COLUMNS = ("t", *OUTPUT_NAMES, "V", *ACTUATOR_COLUMNS.values())
+"""Columns of a co-simulation table: the hinge's outputs at t, the voltage V(t) and the actuator
+force acting on the hinge from t on (over the next communication step)."""
+
+
+def make_trajectory(
+    scene: Scene,
+    s: CosimSettings,
+    table: dict[str, np.ndarray],
+    counts: np.ndarray,
+    stats: dict[str, Any],
+) -> Trajectory:
+    """The Trajectory of a co-simulation run (model name cosim-ENGINE[-ORDERING])."""
+    # onsets known to the communication step (the FMU locates them exactly inside the step)
+    onsets = table["t"][1:][np.diff(counts) > 0] if len(counts) > 1 else np.zeros(0)
+    model = f"cosim-{s.engine}" + ("" if s.engine == "libcosimpy" else f"-{s.ordering}")
+    tr = Trajectory(model=model, scene=scene.name, table=table, contacts=onsets)
+    tr.stats = {
+        "integrator": f"CVODE inside the csfh FMU, rtol={s.tolerance or DEFAULT_TOLERANCE:g}"
+        f"; {s.engine} master, {s.ordering}, communication step {s.step:g} s",
+        **stats,
+    }
+    return tr
+
+
+def write_csv(tr: Trajectory, path: Path) -> Path:
+    """The co-simulation table as CSV, units in the header."""
+    return write_table(path, tr.table, {**UNITS, **COSIM_UNITS})

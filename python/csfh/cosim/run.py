@@ -1,0 +1,59 @@
+"""Co-simulation of the hinge with its comb-drive actuator: the scene's [cosim] settings and the
+entry point that runs them in the chosen engine (fmpy master loop or libcosimpy)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from ..errors import SceneError
+from ..model.cosim_section import CosimSettings, parse_cosim
+from ..model.scene import Scene, load_scene
+from ..progress import Progress
+from ..trajectory import Trajectory
+from .fmpy_master import run_fmpy
+from .libcosim_master import run_libcosimpy
+
+
+def cosim_settings(scene: Scene, **overrides: Any) -> CosimSettings:
+    """The scene's [cosim] settings, with overrides (engine=..., step=..., ordering=...)."""
+    if not scene.cosim:
+        raise SceneError(f"{scene.source or scene.name}: the scene has no [cosim] section")
+    table = dict(scene.cosim)
+    table.update({k: v for k, v in overrides.items() if v is not None})
+    try:
+        return parse_cosim(table, scene.inputs)
+    except SceneError as exc:
+        raise SceneError(f"{scene.source or scene.name}: {exc}") from None
+
+
+RUNNERS: dict[str, Callable[..., Trajectory]] = {"fmpy": run_fmpy, "libcosimpy": run_libcosimpy}
+
+
+def cosimulate(
+    scene: Scene | str | Path,
+    *,
+    engine: str | None = None,
+    step: float | None = None,
+    ordering: str | None = None,
+    stop_time: float | None = None,
+    quiet: bool = True,
+) -> Trajectory:
+    """Co-simulate the scene's hinge with its comb-drive actuator, as set up by the scene's
+    ``[cosim]`` section (its keys: csfh.model.cosim_section), and return the
+    :class:`Trajectory` of the hinge's outputs at the communication points, with the voltage
+    ``V`` and the actuator's ``F_act``, ``F_x``, ``F_y``, ``M``. `scene` is a :class:`Scene`, a
+    built-in scene's name (``combdrive``) or the path of a scene file.
+
+    `engine` (``"fmpy"`` or ``"libcosimpy"``), `step` (s) and `ordering` (``"jacobi"`` or
+    ``"gauss-seidel"``, fmpy only) override the scene's settings, `stop_time` its stop time.
+    Raises :class:`SceneError` for bad settings and :class:`CosimError` when an FMU fails."""
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    settings = cosim_settings(scene, engine=engine, step=step, ordering=ordering)
+    progress = Progress(f"{scene.name}: cosim {settings.engine}", quiet=quiet)
+    try:
+        return RUNNERS[settings.engine](scene, settings, stop_time=stop_time, progress=progress)
+    finally:
+        progress.close()

@@ -1,0 +1,316 @@
+"""Scenes are data: a TOML file names the initial state, the stop time, the preset, which parts of
+the model are on, parameter overrides, constant inputs and integrator settings.
+
+    name = "csfh"
+    description = "..."
+    preset = "paper"            # or "consistent" (PHYSICS.md section 9)
+    stop_time = 1.0             # s
+    models = ["LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau"]   # for `csfh compare`
+
+    [initial]
+    q = [0.01, 0.01, 0.0]       # x [m], y [m], theta [rad] of G1 relative to O2
+    u = [0.0, 0.0, 0.0]         # vx [m/s], vy [m/s], omega [rad/s]
+
+    [parts]
+    flexure = true              # false: the flexure is never evaluated
+    friction = true             # false: the friction law is never evaluated
+
+    [parameters]                # any FMU parameter by name (enumerations by item name)
+    "contact.cr" = 0.9
+
+    [inputs]                    # constant inputs
+    "F_ext[1]" = 0.0            # also F_ext[2], M_ext, a_base[1], a_base[2] (frame acceleration)
+
+    [integrator]
+    rtol = 1e-6                 # CVode relative tolerance (event-driven models)
+    output_interval = 1e-4      # s, rows of the output tables
+    moreau_h = 1e-5             # s, Moreau step
+    stick_rule = "paper"        # Moreau: "paper" (f_a decides) or "memory"; default from preset
+    v_eps = 0.0                 # Moreau: restitution only for gamma_N < -v_eps
+    g_tol = 0.0                 # Moreau: contact active when the gap <= g_tol
+
+    [cosim]                     # co-simulation with the comb-drive actuator (`csfh cosim`);
+                                # keys in csfh.model.cosim_section, ignored by the other commands
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field, replace
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from ..errors import SceneError
+from . import model_info
+from .cosim_section import parse_cosim
+from .presets import PRESETS
+
+BUILTIN_SCENES = ("central", "asymmetric", "csfh", "mems", "combdrive")  # combdrive: `csfh cosim`
+STICK_RULES = ("paper", "memory")
+
+
+@dataclass(frozen=True)
+class IntegratorSettings:
+    """The ``[integrator]`` table of a scene.
+
+    * ``rtol``: relative tolerance of CVODE for the event-driven models (model exchange and
+      co-simulation).
+    * ``output_interval``: s, spacing of the rows of the output tables (and the communication
+      step of co-simulation runs).
+    * ``moreau_h``: s, step of the Moreau stepper.
+    * ``stick_rule``: Moreau, ``"paper"`` (f_a decides sticking) or ``"memory"``; None takes the
+      preset's (docs/model.md §6.4).
+    * ``v_eps``: m/s, Moreau applies restitution only for gamma_N < -v_eps (§6.1, §6.3).
+    * ``g_tol``: m, Moreau treats the contact as active when the gap is <= g_tol.
+    """
+
+    rtol: float = 1e-6
+    output_interval: float = 1e-4
+    moreau_h: float = 1e-5
+    stick_rule: str | None = None
+    v_eps: float = 0.0
+    g_tol: float = 0.0
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A scenario: initial state, stop time, preset, parts, parameter overrides, inputs and
+    integrator settings (the keys of a scene file, see the user guide). Build one with
+    :func:`load_scene` or :func:`scene_from_dict`; it is immutable (:meth:`with_parameters`
+    makes a modified copy).
+
+    * ``q0``, ``u0``: initial x [m], y [m], theta [rad] of G1 relative to O2, and their rates.
+    * ``flexure``, ``friction``: whether those parts of the model are on.
+    * ``parameters``: FMU parameters by name, applied after the preset's.
+    * ``inputs``: constant values of ``F_ext[1]``, ``F_ext[2]``, ``M_ext``, ``a_base[1]``,
+      ``a_base[2]`` (the frame's acceleration, docs/model.md §14.1).
+    * ``models``: the models of ``csfh compare`` on this scene.
+    * ``cosim``: the raw ``[cosim]`` table (validated by :func:`cosimulate`).
+    """
+
+    name: str
+    description: str = ""
+    preset: str = "paper"
+    stop_time: float = 1.0
+    q0: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    u0: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    flexure: bool = True
+    friction: bool = True
+    parameters: dict[str, Any] = field(default_factory=dict)
+    inputs: dict[str, float] = field(default_factory=dict)
+    integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
+    models: tuple[str, ...] = model_info.PAPER_MODELS
+    source: str = ""
+    cosim: dict[str, Any] = field(default_factory=dict)  # [cosim], see csfh.model.cosim_section
+
+    @property
+    def x0(self) -> list[float]:
+        """The six initial states [x, y, theta, vx, vy, omega]."""
+        return [*self.q0, *self.u0]
+
+    @property
+    def stick_rule(self) -> str:
+        """The Moreau stick rule in use: the scene's, else its preset's."""
+        return self.integrator.stick_rule or PRESETS[self.preset].stick_rule
+
+    def parameter_values(self, law: str | None = None) -> dict[str, float | int | bool]:
+        """Every parameter the scene sets, in application order: preset, parts, overrides, and
+        the contact law of the model (None: keep the scene's)."""
+        values: dict[str, Any] = dict(PRESETS[self.preset].parameters)
+        values["flexure.enabled"] = self.flexure
+        values["friction.enabled"] = self.friction
+        values.update(self.parameters)
+        if law is not None and law != "Moreau":
+            values["contact.law"] = law
+        return {name: model_info.coerce(name, v) for name, v in values.items()}
+
+    def with_parameters(self, **overrides: Any) -> Scene:
+        """A copy with more parameter overrides; names with dots go through a dict:
+        ``scene.with_parameters(**{"contact.cr": 0.8})``."""
+        return replace(self, parameters={**self.parameters, **overrides})
+
+
+_TOP_KEYS = {
+    "name",
+    "description",
+    "preset",
+    "stop_time",
+    "initial",
+    "parts",
+    "parameters",
+    "inputs",
+    "integrator",
+    "models",
+    "cosim",
+}
+_INPUTS = ("F_ext[1]", "F_ext[2]", "M_ext", "a_base[1]", "a_base[2]")
+
+
+def _number(where: str, value: Any, positive: bool = False, nonnegative: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise SceneError(f"{where} = {value!r} must be a finite number")
+    if positive and not value > 0:
+        raise SceneError(f"{where} = {value!r} must be > 0")
+    if nonnegative and not value >= 0:
+        raise SceneError(f"{where} = {value!r} must be >= 0")
+    return float(value)
+
+
+def _table(where: str, value: Any, allowed: set[str] | None = None) -> dict[str, Any]:
+    if not isinstance(value, dict):
+        raise SceneError(f"{where} must be a table")
+    if allowed is not None:
+        unknown = sorted(set(value) - allowed)
+        if unknown:
+            raise SceneError(
+                f"{where}: unknown key {unknown[0]!r} (allowed: {', '.join(sorted(allowed))})"
+            )
+    return value
+
+
+def _vector3(where: str, value: Any) -> tuple[float, float, float]:
+    if not isinstance(value, list) or len(value) != 3:
+        raise SceneError(f"{where} must be a list of 3 numbers")
+    a, b, c = (_number(f"{where}[{i}]", v) for i, v in enumerate(value))
+    return (a, b, c)
+
+
+def scene_from_dict(data: dict[str, Any], source: str = "<dict>") -> Scene:
+    """Validate a parsed scene and build it; errors name the file and the key."""
+    try:
+        return _scene_from_dict(data, source)
+    except SceneError as exc:
+        raise SceneError(f"{source}: {exc}") from None
+
+
+def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
+    _table("scene", data, _TOP_KEYS)
+    name = data.get("name", Path(source).stem)
+    if not isinstance(name, str) or not name:
+        raise SceneError("name must be a non-empty string")
+    preset = data.get("preset", "paper")
+    if preset not in PRESETS:
+        raise SceneError(f"preset = {preset!r} is not one of {', '.join(PRESETS)}")
+    stop_time = _number("stop_time", data.get("stop_time", 1.0), positive=True)
+    initial = _table("[initial]", data.get("initial", {}), {"q", "u"})
+    q0 = _vector3("initial.q", initial.get("q", [0.0, 0.0, 0.0]))
+    u0 = _vector3("initial.u", initial.get("u", [0.0, 0.0, 0.0]))
+    parts = _table("[parts]", data.get("parts", {}), {"flexure", "friction"})
+    for key, value in parts.items():
+        if not isinstance(value, bool):
+            raise SceneError(f"parts.{key} = {value!r} must be true or false")
+    parameters = dict(_table("[parameters]", data.get("parameters", {})))
+    known = set(model_info.parameter_names())
+    for key, value in parameters.items():
+        if key not in known:
+            raise SceneError(f"parameters: unknown parameter {key!r}")
+        if key in ("flexure.enabled", "friction.enabled"):
+            raise SceneError(f"parameters: set {key!r} with [parts]")
+        try:
+            model_info.coerce(key, value)
+        except ValueError as exc:
+            raise SceneError(f"parameters: {exc}") from None
+    inputs = _table("[inputs]", data.get("inputs", {}), set(_INPUTS))
+    inputs = {k: _number(f"inputs.{k}", v) for k, v in inputs.items()}
+    integ = _table(
+        "[integrator]",
+        data.get("integrator", {}),
+        {"rtol", "output_interval", "moreau_h", "stick_rule", "v_eps", "g_tol"},
+    )
+    settings = IntegratorSettings(
+        rtol=_number("integrator.rtol", integ.get("rtol", 1e-6), positive=True),
+        output_interval=_number(
+            "integrator.output_interval", integ.get("output_interval", 1e-4), positive=True
+        ),
+        moreau_h=_number("integrator.moreau_h", integ.get("moreau_h", 1e-5), positive=True),
+        stick_rule=integ.get("stick_rule"),
+        v_eps=_number("integrator.v_eps", integ.get("v_eps", 0.0), nonnegative=True),
+        g_tol=_number("integrator.g_tol", integ.get("g_tol", 0.0)),
+    )
+    if settings.rtol >= 1:
+        raise SceneError(f"integrator.rtol = {settings.rtol} must be < 1")
+    if settings.stick_rule is not None and settings.stick_rule not in STICK_RULES:
+        raise SceneError(
+            f"integrator.stick_rule = {settings.stick_rule!r} is not one of "
+            f"{', '.join(STICK_RULES)}"
+        )
+    models = data.get("models", list(model_info.PAPER_MODELS))
+    if not isinstance(models, list) or not models:
+        raise SceneError("models must be a non-empty list")
+    for m in models:
+        if m not in model_info.MODELS:
+            raise SceneError(f"models: unknown model {m!r} (known: {', '.join(model_info.MODELS)})")
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise SceneError("description must be a string")
+    cosim = dict(_table("[cosim]", data.get("cosim", {})))
+    if cosim:
+        parse_cosim(cosim, inputs)  # co-simulation settings: one-line errors like the above
+    scene = Scene(
+        name=name,
+        description=description,
+        preset=preset,
+        stop_time=stop_time,
+        q0=q0,
+        u0=u0,
+        flexure=parts.get("flexure", True),
+        friction=parts.get("friction", True),
+        parameters=parameters,
+        inputs=inputs,
+        integrator=settings,
+        models=tuple(models),
+        source=source,
+        cosim=cosim,
+    )
+    _check_values(scene)
+    return scene
+
+
+def _check_values(scene: Scene) -> None:
+    """Run the model's own validation (ranges, R1 < R2, v0 < v1, ...) on the scene's values."""
+    from .core import CoreModel, ParameterError
+
+    model = CoreModel()
+    try:
+        for name, value in scene.parameter_values().items():
+            model.set(name, value)
+        model.prepare()
+    except ParameterError as exc:
+        raise SceneError(f"parameters: {exc}") from None
+    # the FMU refuses a start deeper in the bore than contact.max_initial_indentation
+    import numpy as np
+
+    model.state = np.array(scene.x0)
+    depth, limit = -model.get("contact.gap"), model.get("contact.max_initial_indentation")
+    if depth > limit:
+        raise SceneError(
+            f"initial.q = {list(scene.q0)} is {depth:.6g} m deep in the bore (indentation "
+            f"{depth:.6g} m > contact.max_initial_indentation = {limit:g} m)"
+        )
+
+
+def load_scene(scene: str | Path) -> Scene:
+    """A built-in scene by name (``central``, ``asymmetric``, ``csfh``, ``mems``, ``combdrive``) or
+    a scene file by path. Raises :class:`SceneError` with a one-line message naming the file, the
+    key and the value when the scene cannot be used."""
+    path = Path(scene)
+    if path.suffix == ".toml" or path.exists():
+        if not path.is_file():
+            raise SceneError(f"{path}: no such scene file")
+        text = path.read_text(encoding="utf-8")
+        source = str(path)
+    elif str(scene) in BUILTIN_SCENES:
+        text = resources.files("csfh").joinpath("scenes", f"{scene}.toml").read_text("utf-8")
+        source = f"{scene} (built-in)"
+    else:
+        raise SceneError(
+            f"unknown scene {str(scene)!r}: use one of {', '.join(BUILTIN_SCENES)} "
+            "or the path of a .toml scene file"
+        )
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{source}: not valid TOML: {exc}") from None
+    return scene_from_dict(data, source)

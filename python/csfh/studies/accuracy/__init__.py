@@ -1,0 +1,1 @@
+"""The accuracy study: metrics, the study itself, its report and its work-precision figures."""

@@ -1,0 +1,1 @@
+"""The tolerance Monte Carlo: the study (file, sampling, tasks, analysis) and its report."""
