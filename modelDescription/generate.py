@@ -18,7 +18,7 @@ Optional keys of [model] name the C side; their defaults are the csfh model's:
     c_include = "csfh_model.h"        the header that declares it
     log_events_description = "..."    description of the logEvents log category
 
-Usage: generate.py VARIABLES_TOML OUTDIR
+Usage: generate.py VARIABLES_TOML OUTDIR [--source-files NAME ...]
 """
 
 from __future__ import annotations
@@ -139,7 +139,9 @@ def guid_of(spec: dict) -> str:
 # modelDescription.xml
 
 
-def xml_model_description(spec: dict, guid: str) -> str:
+def xml_model_description(spec: dict, guid: str, source_files: tuple[str, ...] = ()) -> str:
+    """The model description; `source_files` (file names under sources/) become <SourceFiles>
+    of both interfaces (a source FMU, built by cmake/fmu.cmake)."""
     model = spec["model"]
     variables = spec["variables"]
     index = {v["name"]: i + 1 for i, v in enumerate(variables)}
@@ -158,15 +160,29 @@ def xml_model_description(spec: dict, guid: str) -> str:
         f'numberOfEventIndicators="{model["numberOfEventIndicators"]}">'
     )
     mi = model["modelIdentifier"]
-    w(
-        f'  <ModelExchange modelIdentifier="{mi}" canGetAndSetFMUstate="true" '
+
+    def interface(tag: str, attrs: str) -> None:
+        """<ModelExchange>, <CoSimulation>: with <SourceFiles> when the FMU carries sources."""
+        if not source_files:
+            w(f"  <{tag} {attrs}/>")
+            return
+        w(f"  <{tag} {attrs}>")
+        w("    <SourceFiles>")
+        for name in source_files:
+            w(f"      <File name={quoteattr(name)}/>")
+        w("    </SourceFiles>")
+        w(f"  </{tag}>")
+
+    interface(
+        "ModelExchange",
+        f'modelIdentifier="{mi}" canGetAndSetFMUstate="true" '
         f'canSerializeFMUstate="true" canNotUseMemoryManagementFunctions="true" '
-        f'completedIntegratorStepNotNeeded="true"/>'
+        f'completedIntegratorStepNotNeeded="true"',
     )
     if "cosimulation" in spec:
         cs = spec["cosimulation"]
         attrs = " ".join(f'{k}="{str(v).lower()}"' for k, v in cs.items())
-        w(f'  <CoSimulation modelIdentifier="{mi}" {attrs}/>')
+        interface("CoSimulation", f'modelIdentifier="{mi}" {attrs}')
     w("  <UnitDefinitions>")
     for u in spec["units"]:
         base = {k: u[k] for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad") if k in u}
@@ -406,6 +422,13 @@ def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("variables", type=Path)
     ap.add_argument("outdir", type=Path)
+    ap.add_argument(
+        "--source-files",
+        nargs="+",
+        default=[],
+        metavar="NAME",
+        help="the .c files under the FMU's sources/ (written as <SourceFiles>)",
+    )
     args = ap.parse_args(argv)
     try:
         spec = load(args.variables)
@@ -417,7 +440,7 @@ def main(argv: list[str]) -> int:
     prefix = c_names(spec)[0]
     source = args.variables.name
     files = {
-        "modelDescription.xml": xml_model_description(spec, guid),
+        "modelDescription.xml": xml_model_description(spec, guid, tuple(args.source_files)),
         f"{prefix}_variables.h": c_header(spec, guid, source),
         f"{prefix}_enums.h": c_enums(spec, source),
         f"{prefix}_variables.c": c_source(spec, source),
