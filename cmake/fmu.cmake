@@ -28,6 +28,11 @@ if(NOT EXISTS ${FMI_HEADERS_DIR}/fmi2Functions.h)
 endif()
 message(STATUS "FMI 2.0 headers: ${FMI_HEADERS_DIR}")
 
+if(APPLE)
+  # an FMU binary is a dynamic library (dlopen-ed like any), not a Mach-O bundle
+  string(REPLACE "-bundle" "-dynamiclib" CMAKE_SHARED_MODULE_CREATE_C_FLAGS
+         "${CMAKE_SHARED_MODULE_CREATE_C_FLAGS}")
+endif()
 if(WIN32)
   set(CSFH_FMU_PLATFORM win64)
 elseif(APPLE)
@@ -46,19 +51,25 @@ function(csfh_add_fmu_binary target)
   target_compile_options(${target} PRIVATE ${CSFH_WARNINGS})
   target_link_libraries(${target} PRIVATE ${ARG_LINK})
   set_property(GLOBAL APPEND PROPERTY CSFH_FMU_MODEL_IDENTIFIERS ${ARG_MODEL_IDENTIFIER})
+  if(CSFH_CROSS_BUILD)
+    target_link_options(${target} PRIVATE -s)  # zig keeps debug information otherwise
+  endif()
   if(WIN32)
     # exports: the functions FMI2_Export marks __declspec(dllexport) in fmi2Functions.h, only
     set_target_properties(${target} PROPERTIES SUFFIX ".dll")
   elseif(APPLE)
     # exports: the fmi2* functions (default visibility), everything else is hidden
     set_target_properties(${target} PROPERTIES SUFFIX ".dylib")
+    target_link_options(${target} PRIVATE -Wl,-install_name,@rpath/${ARG_MODEL_IDENTIFIER}.dylib)
     target_link_libraries(${target} PRIVATE m)
   else()
     # export only the fmi2* functions; keep the static SUNDIALS symbols inside
     target_link_libraries(${target} PRIVATE m)
     target_link_options(${target} PRIVATE
-      -Wl,--version-script=${PROJECT_SOURCE_DIR}/fmu_src/fmi/exports.map
-      -Wl,--exclude-libs,ALL -Wl,--no-undefined)
+      -Wl,--version-script=${PROJECT_SOURCE_DIR}/fmu_src/fmi/exports.map -Wl,--no-undefined)
+    if(CMAKE_C_COMPILER_ID STREQUAL "GNU")  # (zig's linker has no --exclude-libs; the version
+      target_link_options(${target} PRIVATE -Wl,--exclude-libs,ALL)  # script suffices)
+    endif()
   endif()
 endfunction()
 

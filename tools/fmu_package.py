@@ -23,7 +23,7 @@ import zipfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from macho_fat import MachOError, fat  # noqa: E402
+from macho_fat import MachOError, fat
 
 TIMESTAMP = (2020, 1, 1, 0, 0, 0)
 
