@@ -26,8 +26,10 @@ from __future__ import annotations
 import argparse
 import hashlib
 import math
+import os
 import re
 import sys
+import time
 import tomllib
 import uuid
 from pathlib import Path
@@ -61,6 +63,10 @@ def c_names(spec: dict) -> tuple[str, str, str, str]:
         model.get("c_struct", "csfh_model_t"),
         model.get("c_include", "csfh_model.h"),
     )
+
+
+# [default_experiment] of a spec without one
+DEFAULT_EXPERIMENT = {"startTime": 0.0, "stopTime": 1.0, "tolerance": 1e-6}
 
 
 class SpecError(Exception):
@@ -130,6 +136,19 @@ def load(path: Path) -> dict:
     return spec
 
 
+def build_epoch(given: int | None) -> int:
+    """The generation time: given, else $SOURCE_DATE_EPOCH (reproducible builds), else now."""
+    if given is not None:
+        return given
+    env = os.environ.get("SOURCE_DATE_EPOCH", "")
+    if env:
+        try:
+            return int(env)
+        except ValueError:
+            raise SpecError(f"SOURCE_DATE_EPOCH = {env!r} is not an integer") from None
+    return int(time.time())
+
+
 def guid_of(spec: dict) -> str:
     digest = hashlib.sha256(repr(spec).encode()).hexdigest()
     return "{" + str(uuid.UUID(digest[:32])) + "}"
@@ -139,11 +158,15 @@ def guid_of(spec: dict) -> str:
 # modelDescription.xml
 
 
-def xml_model_description(spec: dict, guid: str, source_files: tuple[str, ...] = ()) -> str:
+def xml_model_description(
+    spec: dict, guid: str, epoch: int, source_files: tuple[str, ...] = ()
+) -> str:
     """The model description; `source_files` (file names under sources/) become <SourceFiles>
     of both interfaces (a source FMU, built by cmake/fmu.cmake)."""
     model = spec["model"]
     variables = spec["variables"]
+    units = {u["name"]: u for u in spec.get("units", [])}
+    generated = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(epoch))
     index = {v["name"]: i + 1 for i, v in enumerate(variables)}
     states = [v["name"] for v in variables if v.get("state")]
     inputs = [v["name"] for v in variables if v["causality"] == "input"]
@@ -156,6 +179,7 @@ def xml_model_description(spec: dict, guid: str, source_files: tuple[str, ...] =
         f'guid="{guid}" description={quoteattr(model["description"])} '
         f"author={quoteattr(model['author'])} version={quoteattr(model['version'])} "
         f'generationTool="csfh modelDescription/generate.py" '
+        f'generationDateAndTime="{generated}" '
         f'variableNamingConvention="structured" '
         f'numberOfEventIndicators="{model["numberOfEventIndicators"]}">'
     )
@@ -221,7 +245,16 @@ def xml_model_description(spec: dict, guid: str, source_files: tuple[str, ...] =
     )
     w('    <Category name="logAll" description="Every FMI call"/>')
     w("  </LogCategories>")
-    w('  <DefaultExperiment startTime="0" stopTime="1" tolerance="1e-06"/>')
+    experiment = spec.get("default_experiment", DEFAULT_EXPERIMENT)
+    w(
+        "  <DefaultExperiment "
+        + " ".join(
+            f'{key}="{fmt_xml_real(experiment[key])}"'
+            for key in ("startTime", "stopTime", "tolerance", "stepSize")
+            if key in experiment
+        )
+        + "/>"
+    )
     w("  <ModelVariables>")
     for i, v in enumerate(variables, start=1):
         attrs = [f"name={quoteattr(v['name'])}", f'valueReference="{v["vr"]}"']
@@ -236,16 +269,30 @@ def xml_model_description(spec: dict, guid: str, source_files: tuple[str, ...] =
         ta: list[str] = []
         if v["type"] == "Enumeration":
             ta.append(f'declaredType="{v["declaredType"]}"')
+        quantity = v.get("quantity", units.get(v.get("unit", ""), {}).get("quantity"))
+        if quantity and v["type"] == "Real":
+            ta.append(f"quantity={quoteattr(quantity)}")
         for key in ("unit", "displayUnit"):
             if key in v:
                 ta.append(f"{key}={quoteattr(v[key])}")
         if "range" in v:
-            lo, hi, _, _ = parse_range(v["range"])
-            fmt_bound = (lambda x: str(int(x))) if v["type"] == "Integer" else fmt_xml_real
-            if math.isfinite(lo):
-                ta.append(f'min="{fmt_bound(lo)}"')
-            if math.isfinite(hi):
-                ta.append(f'max="{fmt_bound(hi)}"')
+            lo, hi, lo_open, hi_open = parse_range(v["range"])
+            if v["type"] == "Integer":
+                # open ends: the next integer inside
+                bounds = (lo + 1 if lo_open else lo, hi - 1 if hi_open else hi)
+                fmt_bound = lambda x: str(int(x))  # noqa: E731
+            else:
+                # FMI's min and max are inclusive: an open end is the next double inside, the
+                # extreme value the FMU's check accepts
+                bounds = (
+                    math.nextafter(lo, math.inf) if lo_open and math.isfinite(lo) else lo,
+                    math.nextafter(hi, -math.inf) if hi_open and math.isfinite(hi) else hi,
+                )
+                fmt_bound = fmt_xml_real
+            if math.isfinite(bounds[0]):
+                ta.append(f'min="{fmt_bound(bounds[0])}"')
+            if math.isfinite(bounds[1]):
+                ta.append(f'max="{fmt_bound(bounds[1])}"')
         if "nominal" in v:
             ta.append(f'nominal="{fmt_xml_real(v["nominal"])}"')
         if "derivative_of" in v:
@@ -423,6 +470,12 @@ def main(argv: list[str]) -> int:
     ap.add_argument("variables", type=Path)
     ap.add_argument("outdir", type=Path)
     ap.add_argument(
+        "--epoch",
+        type=int,
+        default=None,
+        help="generationDateAndTime in seconds since 1970 (default: $SOURCE_DATE_EPOCH, else now)",
+    )
+    ap.add_argument(
         "--source-files",
         nargs="+",
         default=[],
@@ -432,6 +485,7 @@ def main(argv: list[str]) -> int:
     args = ap.parse_args(argv)
     try:
         spec = load(args.variables)
+        epoch = build_epoch(args.epoch)
     except (SpecError, KeyError, tomllib.TOMLDecodeError) as exc:
         print(f"generate.py: {args.variables}: {exc}", file=sys.stderr)
         return 1
@@ -440,7 +494,9 @@ def main(argv: list[str]) -> int:
     prefix = c_names(spec)[0]
     source = args.variables.name
     files = {
-        "modelDescription.xml": xml_model_description(spec, guid, tuple(args.source_files)),
+        "modelDescription.xml": xml_model_description(
+            spec, guid, epoch, tuple(args.source_files)
+        ),
         f"{prefix}_variables.h": c_header(spec, guid, source),
         f"{prefix}_enums.h": c_enums(spec, source),
         f"{prefix}_variables.c": c_source(spec, source),

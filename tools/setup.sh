@@ -26,7 +26,8 @@ if ! grep -rqsE '^(deb-src |Types:.*deb-src)' /etc/apt/sources.list /etc/apt/sou
 fi
 
 missing=()
-for pkg in libsundials-dev cmake ninja-build gcc make dpkg-dev wine64 llvm binutils; do
+# libtbb12: the Ecos co-simulation engine (ecospy, tests/python/test_registry_importers.py)
+for pkg in libsundials-dev cmake ninja-build gcc make dpkg-dev wine64 llvm binutils libtbb12; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
 done
 if [ ${#missing[@]} -gt 0 ] || [ "$need_update" -eq 1 ]; then
@@ -38,6 +39,6 @@ if [ ${#missing[@]} -gt 0 ]; then
     "${missing[@]}" >/dev/null
 fi
 
-python3 -m pip install -q --disable-pip-version-check ".[test,dask,cosim]"
+python3 -m pip install -q --disable-pip-version-check ".[test,dask,cosim,docs]"
 command -v pyenv >/dev/null 2>&1 && pyenv rehash || true
 echo "setup: csfh $(python3 -c 'import csfh; print(csfh.__version__, csfh.fmu_path())')"

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Run every test: the C unit tests under AddressSanitizer + UndefinedBehaviorSanitizer (ctest),
-# then the Python tests (pytest, against the installed package's FMU) and the linters.
+# Run every test: the C unit tests under AddressSanitizer + UndefinedBehaviorSanitizer (ctest), the
+# FMI fuzz tests (ASan + UBSan + LeakSanitizer), then the Python tests (pytest, against the
+# installed package's FMU; they run examples/ too), the documentation build (Sphinx, warnings as
+# errors) and the linters.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -11,6 +13,12 @@ cmake -S . -B build-asan -G Ninja -DCSFH_SANITIZE=ON -DCSFH_BUILD_FMU=OFF -DCMAK
 cmake --build build-asan
 ctest --test-dir build-asan --output-on-failure
 
+echo "== FMI fuzz tests of both FMUs (ASan + UBSan + LeakSanitizer, fixed seeds)"
+cmake -S . -B build-fuzz -G Ninja -DCSFH_FUZZ=ON -DCSFH_BUILD_TESTS=OFF -DCSFH_BUILD_BENCHMARKS=OFF \
+  -DCSFH_PLATFORMS=host >/dev/null
+cmake --build build-fuzz --target csfh_fuzz
+ctest --test-dir build-fuzz -L fuzz --output-on-failure
+
 echo "== FMU build tree (every platform: cmake/platforms.cmake)"
 cmake -S . -B build -G Ninja -DCSFH_PLATFORMS=all >/dev/null
 cmake --build build
@@ -19,5 +27,9 @@ ctest --test-dir build -L sundials --output-on-failure
 echo "== Python tests"
 python3 -m pytest -q
 
+echo "== docs (Sphinx, warnings as errors)"
+python3 -m sphinx -W --keep-going -q -b html docs build/docs
+python3 tools/model_citations.py check
+
 echo "== lint"
-python3 -m ruff check python tests modelDescription benchmarks
+python3 -m ruff check python tests modelDescription benchmarks examples tools docs/conf.py

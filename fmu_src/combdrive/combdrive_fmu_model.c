@@ -50,4 +50,5 @@ const fmu_model_t fmu_model = {
     .outputs = outputs,
     .add_integrator_steps = NULL,
     .cs_method = NULL,
+    .check_state = NULL, /* every field is a table variable or recomputed (d, out) */
 };

@@ -83,6 +83,17 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
     if (check_all_values(m, msg, msg_size) != 0) {
         return -1;
     }
+    /* the Enumeration parameters set as Integers (for importers that ignore Enumerations); the
+     * numbers are range-checked above like the Enumerations */
+    if (m->p.law_number != 0) {
+        m->p.law = m->p.law_number;
+    }
+    if (m->p.esdu_reading_number != 0) {
+        m->p.esdu_reading = m->p.esdu_reading_number;
+    }
+    if (m->cs_method_number != 0) {
+        m->cs_method = m->cs_method_number;
+    }
     /* cross-checks */
     char b1[32], b2[32];
     if (!(p->R1 < p->R2)) {
@@ -263,6 +274,26 @@ int csfh_model_event_update(csfh_model_t *m)
     return 0;
 }
 
+int csfh_model_check_start(const csfh_model_t *m, char *msg, size_t msg_size)
+{
+    if (m->p.law == CSFH_CONTACTLAW_NONE) {
+        return 0;
+    }
+    /* indentation = -g, the gap of PHYSICS.md section 3 */
+    const double indentation = -csfh_contact_gap(m->d.delta, m->p.s1bar, m->x);
+    if (!(indentation > m->p.max_initial_indentation)) {
+        return 0;
+    }
+    char b[4][32];
+    snprintf(msg, msg_size,
+             "the start state body1.x = %s m, body1.y = %s m, body1.theta = %s rad is %.6g m deep "
+             "in the bore (contact.indentation = %.6g m > contact.max_initial_indentation = %s m)",
+             csfh_format_value(b[0], m->x[0]), csfh_format_value(b[1], m->x[1]),
+             csfh_format_value(b[2], m->x[2]), indentation, indentation,
+             csfh_format_value(b[3], m->p.max_initial_indentation));
+    return -1;
+}
+
 void csfh_model_init_discrete(csfh_model_t *m)
 {
     m->z.in_contact = 0;
@@ -271,6 +302,20 @@ void csfh_model_init_discrete(csfh_model_t *m)
     m->z.onset_time = m->z.release_time = m->time; /* until a contact happens */
     m->z.release_speed = 0.0;
     csfh_model_event_update(m);
+}
+
+int csfh_model_peak_values(csfh_model_t *m, const double x[6], double v[CSFH_N_PEAKS])
+{
+    v[0] = v[1] = v[2] = 0.0;
+    if (!m->z.in_contact || m->p.law == CSFH_CONTACTLAW_NONE) {
+        return 0;
+    }
+    csfh_contact_eval_t c;
+    csfh_model_contact(m, x, x + 3, &c);
+    v[0] = c.F_N;
+    v[1] = fabs(c.F_T);
+    v[2] = c.rho;
+    return 1;
 }
 
 int csfh_model_outputs(csfh_model_t *m)
@@ -304,5 +349,11 @@ int csfh_model_outputs(csfh_model_t *m)
     }
     o->E_contact = c.touching ? csfh_normal_elastic_energy(&m->d.normal, c.rho) : 0.0;
     o->E_total = o->E_kinetic + o->E_gravity + o->E_flexure + o->E_contact;
+    /* peaks: the communication step's so far (co-simulation), and the current values */
+    const double now[CSFH_N_PEAKS] = {o->F_N, fabs(o->F_T), o->indentation};
+    double *peak[CSFH_N_PEAKS] = {&o->F_N_peak, &o->F_T_peak, &o->indentation_peak};
+    for (int j = 0; j < CSFH_N_PEAKS; j++) {
+        *peak[j] = m->peaks.active && m->peaks.v[j] > now[j] ? m->peaks.v[j] : now[j];
+    }
     return c.status == CSFH_LAW_ESDU_CLAMPED ? CSFH_WARN_ESDU_CLAMPED : CSFH_OK;
 }

@@ -21,6 +21,7 @@ typedef struct {
     double g;          /* m/s^2, along -Y */
     /* contact */
     int law;           /* csfh_contact_law_t */
+    int law_number, esdu_reading_number; /* 0, or the enumeration value to set (libcosim) */
     double R1, R2;     /* m */
     double E1, E2, nu1, nu2;
     double L;          /* contact length, m */
@@ -32,6 +33,7 @@ typedef struct {
     int esdu_sigma_pi;
     double v_min;      /* m/s */
     double gap_hysteresis; /* m */
+    double max_initial_indentation; /* m: deepest start state accepted */
     /* friction */
     int friction_enabled;
     double fd, fa, v0, v1;
@@ -67,7 +69,19 @@ typedef struct {
 typedef struct {
     double F_N, F_T, indentation, gap, v_T, indentation_rate;
     double E_total, E_kinetic, E_gravity, E_flexure, E_contact;
+    double F_N_peak, F_T_peak, indentation_peak; /* see csfh_peaks_t */
 } csfh_outputs_t;
+
+/* Peak outputs (contact.F_N_peak, contact.F_T_peak = the largest |F_T|,
+ * contact.indentation_peak): in co-simulation the largest values over the last communication
+ * step (its end included), located on the integrator's interpolant by the co-simulation
+ * stepper (csfh_model_peak_values); where no step was taken (model exchange, before the first
+ * fmi2DoStep) the instantaneous values. */
+#define CSFH_N_PEAKS 3
+typedef struct {
+    int active;               /* 1 after the first communication step */
+    double v[CSFH_N_PEAKS];   /* F_N, |F_T|, indentation so far in this communication step */
+} csfh_peaks_t;
 
 typedef struct {
     double time;
@@ -79,7 +93,9 @@ typedef struct {
     csfh_discrete_t z;
     csfh_outputs_t out;
     csfh_counters_t counters;
+    csfh_peaks_t peaks;
     int cs_method;      /* solver.method (CvodeMethod): read by the co-simulation glue only */
+    int cs_method_number; /* 0, or the solver.method value to set (libcosim) */
     int contact_by_gap; /* 1: the contact force acts wherever the gap is negative, also before
                          * the onset event (the paper's RK4 scheme, which has no root finding
                          * and bisects the step instead); 0 (default): in the contact mode only */
@@ -115,6 +131,12 @@ int *csfh_variable_int(csfh_model_t *m, const csfh_variable_t *v);
  * quantities are then left unchanged). */
 int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size);
 
+/* The start state must not be deeper in the bore than contact.max_initial_indentation (a start
+ * far inside the clearance is a typo, and the contact law would answer it with an unphysical
+ * force): 0, or -1 with a message naming the state and the indentation. No check without a
+ * contact law. */
+int csfh_model_check_start(const csfh_model_t *m, char *msg, size_t msg_size);
+
 /* Set the discrete contact state from the initial continuous state (end of initialization). */
 void csfh_model_init_discrete(csfh_model_t *m);
 
@@ -137,6 +159,10 @@ double csfh_model_event_indicator(const csfh_model_t *m, const double x[6]);
 /* Contact mode update at an event, from m->x at m->time. Returns 0 (no change), 1 (onset: the
  * indentation rate and the time are captured) or 2 (release: time and separation speed). */
 int csfh_model_event_update(csfh_model_t *m);
+
+/* The quantities of the peak outputs at state x with the current contact mode: v = {F_N, |F_T|,
+ * indentation}. Returns 0 (and zeros) outside the contact mode, without evaluating anything. */
+int csfh_model_peak_values(csfh_model_t *m, const double x[6], double v[CSFH_N_PEAKS]);
 
 /* Fill m->out (forces, gap, energies) at the current state. */
 int csfh_model_outputs(csfh_model_t *m);

@@ -30,7 +30,18 @@
  * instance then holds the last state CVODE reached successfully, at that time (also reported by
  * fmi2GetRealStatus(fmi2LastSuccessfulTime)); fmi2SetFMUstate can roll it back.
  *
+ * Time: CVODE integrates in a local time tau = t - origin, measured from a time origin the
+ * instance holds (the communication point where CVODE was last started from outside: first
+ * step, changed input, state or parameter, FMU state taken or restored; never moved at events).
+ * The integration, its step sizes and its root finding are then the same whatever the start
+ * time: a run from t0 = 1e10 s reproduces the run from 0, shifted, where CVODE in the absolute
+ * time could not resolve its steps (ulp(1e10) = 1.9e-6 s) and drifted. A communication point
+ * maps to tau exactly (t_end - origin, both multiples of ulp(origin) near the origin). CVODE's
+ * own warnings (e.g. "t + h = t" after a very long run) make fmi2DoStep return fmi2Warning;
+ * fmi2DoStep itself (fmi2_glue.c) reports steps that the double time cannot resolve.
+ *
  * A model without continuous states (the comb-drive actuator) just advances its time. */
+#include <float.h>
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -48,7 +59,9 @@
 
 #define NX fmu_model.n_states
 #define MAX_EVENTS_PER_STEP 1000000L  /* guards against an endless chain of events */
-#define MAX_STEPS_PER_CALL 500000L    /* CVODE steps per fmi2DoStep */
+#ifndef MAX_STEPS_PER_CALL
+#define MAX_STEPS_PER_CALL 500000L    /* CVODE steps per fmi2DoStep (the fuzz build lowers it) */
+#endif
 #define AUTO_WINDOW 100L              /* auto: steps per decision */
 #define AUTO_SUSPECT_FAILED 0.05      /* auto: failed fraction of an Adams window that triggers a trial */
 #define AUTO_BDF_COST 1.5             /* auto: cost of a BDF step over an Adams step */
@@ -76,6 +89,17 @@ struct csfh_cvode {
     double t_root;    /* the state there and its time, */
     int root_pending; /* handled in the communication step that contains it */
     long counted_steps; /* CVODE steps already added to the model's counter */
+    /* peak outputs (fmu_model.n_peaks > 0, track_peaks) */
+    N_Vector peak_y, peak_dy; /* work vectors */
+    double peak_t;            /* the end of the last analysed CVODE step: */
+    int peak_slope_valid;     /* its slopes and values there are valid */
+    double peak_slope[FMU_MAX_PEAKS];
+    double peak_end_v[FMU_MAX_PEAKS];
+    int peak_n_max;           /* the maxima inside it: times and values */
+    double peak_max_t[FMU_MAX_PEAKS];
+    double peak_max_v[FMU_MAX_PEAKS][FMU_MAX_PEAKS];
+    double origin;      /* s: CVODE's time 0 (see the top of this file); CVODE's times are local */
+    long warnings;      /* CVODE warnings so far (error_handler) */
 };
 
 static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
@@ -92,6 +116,13 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *gout, void *user_data)
     fmu_instance_t *inst = (fmu_instance_t *)user_data;
     (void)t;
     fmu_model.event_indicators(inst->model, N_VGetArrayPointer(y), gout);
+    for (int i = 0; i < fmu_model.n_event_indicators; i++) {
+        if (!isfinite(gout[i])) {
+            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
+                    "fmi2DoStep: non-finite event indicator z[%d] = %g", i, gout[i]);
+            return 1; /* CVODE fails the step (CV_RTFUNC_FAIL) */
+        }
+    }
     return 0;
 }
 
@@ -102,7 +133,11 @@ static void error_handler(int error_code, const char *module, const char *functi
     if (error_code < 0) {
         fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "%s %s: %s", module, function, msg);
     } else {
-        fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING, "%s %s: %s", module, function, msg);
+        if (inst->cvode != NULL) {
+            inst->cvode->warnings++; /* fmi2DoStep returns fmi2Warning */
+        }
+        fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING, "%s %s (local time from t0 = %.17g): %s",
+                module, function, inst->cvode != NULL ? inst->cvode->origin : 0.0, msg);
     }
 }
 
@@ -132,6 +167,12 @@ void cs_free(fmu_instance_t *inst)
     }
     if (cv->y_root != NULL) {
         N_VDestroy(cv->y_root);
+    }
+    if (cv->peak_y != NULL) {
+        N_VDestroy(cv->peak_y);
+    }
+    if (cv->peak_dy != NULL) {
+        N_VDestroy(cv->peak_dy);
     }
     if (cv->ctx != NULL) {
         SUNContext_Free(&cv->ctx);
@@ -174,9 +215,10 @@ static int configured_method(const fmu_instance_t *inst)
     return fmu_model.cs_method != NULL ? fmu_model.cs_method(inst->model) : FMU_CS_BDF;
 }
 
-/* (Re)create CVODE's memory with `method` (FMU_CS_BDF or FMU_CS_ADAMS) at the FMU's time and
- * state; the vectors, the matrix and the solvers are kept from one method to the next. */
-static fmi2Status cv_create(fmu_instance_t *inst, int method)
+/* (Re)create CVODE's memory with `method` (FMU_CS_BDF or FMU_CS_ADAMS) at the local time tau
+ * and the FMU's state; the vectors, the matrix and the solvers are kept from one method to the
+ * next. */
+static fmi2Status cv_create(fmu_instance_t *inst, int method, double tau)
 {
     csfh_cvode_t *cv = inst->cvode;
     if (cv->mem != NULL) {
@@ -198,9 +240,9 @@ static fmi2Status cv_create(fmu_instance_t *inst, int method)
     cv->method = method;
     cv->counted_steps = 0;
     cv->root_pending = 0;
-    start_window(cv, *fmu_time(inst));
+    start_window(cv, tau);
     fmi2Status s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
-    if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, *fmu_time(inst), cv->y), "CVodeInit");
+    if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, tau, cv->y), "CVodeInit");
     if (s == fmi2OK) s = cv_check(inst, CVodeSetUserData(cv->mem, inst), "CVodeSetUserData");
     if (s == fmi2OK) s = cv_check(inst, CVodeSVtolerances(cv->mem, inst->tolerance, cv->abstol), "CVodeSVtolerances");
     if (s == fmi2OK && method == FMU_CS_ADAMS) {
@@ -214,7 +256,7 @@ static fmi2Status cv_create(fmu_instance_t *inst, int method)
 }
 
 /* Create CVODE (first step) or re-initialise it at the current state, with the configured
- * method (auto starts with Adams). */
+ * method (auto starts with Adams); the FMU's time becomes the origin of CVODE's local time. */
 static fmi2Status cs_start(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
@@ -227,8 +269,9 @@ static fmi2Status cs_start(fmu_instance_t *inst)
         memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
         cv->counted_steps = 0;
         cv->root_pending = 0;
-        start_segment(cv, *fmu_time(inst));
-        return cv_check(inst, CVodeReInit(cv->mem, *fmu_time(inst), cv->y), "CVodeReInit");
+        cv->origin = *fmu_time(inst);
+        start_segment(cv, 0.0);
+        return cv_check(inst, CVodeReInit(cv->mem, 0.0, cv->y), "CVodeReInit");
     }
     if (cv == NULL) {
         cv = (csfh_cvode_t *)calloc(1, sizeof(*cv));
@@ -260,12 +303,13 @@ static fmi2Status cs_start(fmu_instance_t *inst)
             }
         }
     }
-    const fmi2Status s = cv_create(inst, method);
+    cv->origin = *fmu_time(inst);
+    const fmi2Status s = cv_create(inst, method, 0.0);
     if (s != fmi2OK) {
         cs_free(inst);
         return s;
     }
-    start_segment(inst->cvode, *fmu_time(inst));
+    start_segment(inst->cvode, 0.0);
     return s;
 }
 
@@ -283,8 +327,8 @@ static long count_steps(fmu_instance_t *inst)
     return added;
 }
 
-/* auto: at the end of each window of AUTO_WINDOW steps, the method for the next window; writes
- * what it decided to `why` (empty when nothing changes). */
+/* auto: at the end of each window of AUTO_WINDOW steps (t: CVODE's local time), the method for
+ * the next window; writes what it decided to `why` (empty when nothing changes). */
 static int auto_choose(csfh_cvode_t *cv, double t, char *why, size_t why_size)
 {
     why[0] = '\0';
@@ -309,7 +353,7 @@ static int auto_choose(csfh_cvode_t *cv, double t, char *why, size_t why_size)
             cv->trial = 1;
             snprintf(why, why_size,
                      "t = %.17g: auto: trying BDF (%.0f %% of Adams' steps failed, mean step %.3g s)",
-                     t, 100.0 * failed, mean_h);
+                     cv->origin + t, 100.0 * failed, mean_h);
             return FMU_CS_BDF;
         }
         return FMU_CS_ADAMS;
@@ -322,23 +366,159 @@ static int auto_choose(csfh_cvode_t *cv, double t, char *why, size_t why_size)
         cv->trial = 0;
         if (mean_h > AUTO_BDF_COST * cv->adams_h) {
             snprintf(why, why_size, "t = %.17g: auto: BDF kept (stiff: mean step %.3g s, Adams %.3g s)",
-                     t, mean_h, cv->adams_h);
+                     cv->origin + t, mean_h, cv->adams_h);
             return FMU_CS_BDF;
         }
         cv->holdoff = cv->next_holdoff;
         cv->next_holdoff = cv->next_holdoff < AUTO_MAX_HOLDOFF ? 2 * cv->next_holdoff : AUTO_MAX_HOLDOFF;
         snprintf(why, why_size, "t = %.17g: auto: back to Adams (BDF's mean step %.3g s, Adams %.3g s)",
-                 t, mean_h, cv->adams_h);
+                 cv->origin + t, mean_h, cv->adams_h);
         return FMU_CS_ADAMS;
     }
     return FMU_CS_BDF;
 }
 
-/* Take CVODE's solution (tret, y) as the model's time and state. */
+/* ------------------------------------------------------------------------------------------ */
+/* peak outputs: the largest values of the model's peak quantities over the communication step,
+ * on CVODE's interpolant (the dense output of its last step). Each CVODE step is analysed once,
+ * when it is taken: its end values, and every maximum inside it (the quantity's slope + at the
+ * step's start, <= 0 at its end: the slope's root by regula falsi). Each part of a communication
+ * step then takes the maxima that lie in it; the values at the communication points themselves
+ * are the outputs there (the model's outputs take the max with the step's peaks). */
+
+#define PEAK_ITERATIONS 40 /* regula falsi (Illinois) on the slope: a few are used */
+
+/* The peak quantities v at time t of CVODE's last step, and their time derivatives (a forward
+ * difference along the interpolant's derivative) in slope; 0 when the model has nothing to
+ * track there. */
+static int peak_point(fmu_instance_t *inst, double t, double *v, double *slope)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    double tn = t, hu = 0.0;
+    CVodeGetCurrentTime(cv->mem, &tn);
+    CVodeGetLastStep(cv->mem, &hu);
+    t = t < tn - hu ? tn - hu : (t > tn ? tn : t); /* round-off at the step's ends */
+    if (CVodeGetDky(cv->mem, t, 0, cv->peak_y) < 0) {
+        return 0;
+    }
+    double *py = N_VGetArrayPointer(cv->peak_y), *pd = N_VGetArrayPointer(cv->peak_dy);
+    if (!fmu_model.peak_values(inst->model, py, v) ||
+        CVodeGetDky(cv->mem, t, 1, cv->peak_dy) < 0) {
+        return 0;
+    }
+    const double eps = 1e-7 * (fabs(hu) > 0.0 ? fabs(hu) : 1e-9);
+    for (int i = 0; i < NX; i++) {
+        pd[i] = py[i] + eps * pd[i];
+    }
+    double ve[FMU_MAX_PEAKS];
+    fmu_model.peak_values(inst->model, pd, ve);
+    for (int j = 0; j < fmu_model.n_peaks; j++) {
+        slope[j] = (ve[j] - v[j]) / eps;
+    }
+    return 1;
+}
+
+/* Forget what is known of the last step (CVODE restarted: a new interpolant). */
+static void peaks_forget(csfh_cvode_t *cv)
+{
+    cv->peak_slope_valid = 0;
+    cv->peak_n_max = 0;
+}
+
+/* Analyse CVODE's new step [tn - hu, tn]: its maxima and its end. */
+static void peak_step(fmu_instance_t *inst)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    double tn = 0.0, hu = 0.0, v1[FMU_MAX_PEAKS], s1[FMU_MAX_PEAKS], s0[FMU_MAX_PEAKS];
+    CVodeGetCurrentTime(cv->mem, &tn);
+    CVodeGetLastStep(cv->mem, &hu);
+    const double t0 = tn - hu;
+    const int have_start = cv->peak_slope_valid && cv->peak_t == t0;
+    cv->peak_n_max = 0;
+    if (have_start) {
+        memcpy(s0, cv->peak_slope, sizeof(s0));
+    }
+    if (!peak_point(inst, tn, v1, s1)) {
+        cv->peak_slope_valid = 0;
+        return;
+    }
+    if (have_start || peak_point(inst, t0, cv->peak_max_v[0], s0)) {
+        for (int j = 0; j < fmu_model.n_peaks; j++) {
+            if (!(s0[j] > 0.0 && s1[j] <= 0.0)) {
+                continue;
+            }
+            /* the root of the slope: regula falsi with the Illinois modification (a few
+             * evaluations; the value is flat there, so a time 1e-7 of the step off changes it
+             * by ~1e-14 relative) */
+            double lo = t0, hi = tn, f_lo = s0[j], f_hi = s1[j], v[FMU_MAX_PEAKS], s[FMU_MAX_PEAKS];
+            int side = 0;
+            for (int k = 0; k < PEAK_ITERATIONS && hi - lo > 1e-7 * hu; k++) {
+                double mid = hi - f_hi * (hi - lo) / (f_hi - f_lo);
+                if (!(mid > lo && mid < hi)) {
+                    mid = 0.5 * (lo + hi);
+                }
+                if (!peak_point(inst, mid, v, s)) {
+                    break;
+                }
+                if (s[j] > 0.0) {
+                    lo = mid, f_lo = s[j];
+                    f_hi = side == -1 ? 0.5 * f_hi : f_hi;
+                    side = -1;
+                } else {
+                    hi = mid, f_hi = s[j];
+                    f_lo = side == 1 ? 0.5 * f_lo : f_lo;
+                    side = 1;
+                }
+                if (s[j] == 0.0) {
+                    lo = hi = mid;
+                }
+            }
+            const int m = cv->peak_n_max;
+            if (peak_point(inst, 0.5 * (lo + hi), cv->peak_max_v[m], s)) {
+                cv->peak_max_t[m] = 0.5 * (lo + hi);
+                cv->peak_n_max++;
+            }
+        }
+    }
+    memcpy(cv->peak_slope, s1, sizeof(s1));
+    memcpy(cv->peak_end_v, v1, sizeof(v1));
+    cv->peak_t = tn;
+    cv->peak_slope_valid = 1;
+}
+
+/* The part [ta, tb] of the communication step, the state at tb in cv->y; `stepped`: CVODE took
+ * a new step to get there. */
+static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    if (fmu_model.n_peaks <= 0) {
+        return;
+    }
+    if (cv->peak_y == NULL) {
+        cv->peak_y = N_VClone(cv->y);
+        cv->peak_dy = N_VClone(cv->y);
+        if (cv->peak_y == NULL || cv->peak_dy == NULL) {
+            return; /* out of memory: the peaks fall back to the communication points */
+        }
+    }
+    if (stepped) {
+        peak_step(inst);
+        if (cv->peak_slope_valid && tb == cv->peak_t) {
+            fmu_model.peaks_add(inst->model, cv->peak_end_v);
+        }
+    }
+    for (int m = 0; m < cv->peak_n_max; m++) {
+        if (cv->peak_max_t[m] > ta && cv->peak_max_t[m] <= tb) {
+            fmu_model.peaks_add(inst->model, cv->peak_max_v[m]);
+        }
+    }
+}
+
+/* Take CVODE's solution (local time tret, y) as the model's time and state. */
 static void take_solution(fmu_instance_t *inst, double tret)
 {
     memcpy(fmu_states(inst), N_VGetArrayPointer(inst->cvode->y), NX * sizeof(double));
-    *fmu_time(inst) = tret;
+    *fmu_time(inst) = inst->cvode->origin + tret;
     fmu_invalidate(inst);
 }
 
@@ -352,32 +532,30 @@ static fmi2Status finish_step(fmu_instance_t *inst, double t_end, fmi2Status sta
     return s > status ? s : status;
 }
 
-fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
+fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
 {
-    const double now = *fmu_time(inst);
-    if (fabs(t - now) > 1e-9 * (1.0 + fabs(t))) {
-        fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
-                "fmi2DoStep: currentCommunicationPoint = %.17g does not match the FMU time %.17g",
-                t, now);
-        return fmi2Error;
-    }
-    if (h == 0.0) {
-        return fmi2OK;
-    }
-    const double t_end = t + h;
+    const double now_abs = *fmu_time(inst);
     if (NX == 0) {
-        return finish_step(inst, t_end, fmi2OK); /* no continuous states: nothing to integrate */
+        return finish_step(inst, t_end_abs, fmi2OK); /* no continuous states: nothing to integrate */
     }
     if (inst->cvode == NULL || inst->cvode_needs_reinit) {
         if (cs_start(inst) != fmi2OK) {
             return fmi2Error;
         }
         inst->cvode_needs_reinit = 0;
+        peaks_forget(inst->cvode); /* a new interpolant */
     }
     csfh_cvode_t *cv = inst->cvode;
+    const long warnings = cv->warnings;
+    /* CVODE's local times (see the top of this file) */
+    const double now = now_abs - cv->origin;
+    const double t_end = t_end_abs - cv->origin;
     const int automatic = configured_method(inst) == FMU_CS_AUTO;
     long events = 0, steps = 0;
     double tret = now;
+    if (fmu_model.n_peaks > 0) { /* the step's peaks start with the values at its start */
+        fmu_model.peaks_begin(inst->model, inst->outputs_valid);
+    }
     while (tret < t_end) {
         /* One internal step per call: the solution is taken at every step, and auto can check
          * the stiffness without waiting for the end of the communication step. No stop time:
@@ -385,7 +563,8 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
          * t_end is not repeated: the state at t_end comes from CVODE's interpolant (for this
          * and for later communication points the step covers), and a root CVODE reports beyond
          * t_end is kept pending until the communication step that contains it. */
-        int flag;
+        int flag, stepped = 0;
+        const double tret_before = tret;
         double tn = tret;
         CVodeGetCurrentTime(cv->mem, &tn);
         if (cv->root_pending && cv->t_root <= t_end) {
@@ -402,6 +581,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
              * bounded by a tenth of the distance to tout): a fixed horizon, so that the step
              * sequence does not depend on the communication grid */
             flag = CVode(cv->mem, tret + FIRST_STEP_HORIZON, cv->y, &tret, CV_ONE_STEP);
+            stepped = flag >= 0;
             if (flag >= 0 && tret > t_end) {
                 if (flag == CV_ROOT_RETURN) {
                     memcpy(N_VGetArrayPointer(cv->y_root), N_VGetArrayPointer(cv->y), NX * sizeof(double));
@@ -429,10 +609,11 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
                     "fmi2DoStep: the step from t = %.17g to %.17g failed; the FMU holds the last "
                     "successful state, at t = %.17g",
-                    t, t_end, *fmu_time(inst));
+                    now_abs, t_end_abs, *fmu_time(inst));
             inst->cvode_needs_reinit = 1;
             return fmi2Error;
         }
+        track_peaks(inst, tret_before, tret, stepped);
         take_solution(inst, tret);
         if (flag != CV_ROOT_RETURN && tret >= t_end) {
             break;
@@ -441,7 +622,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
                     "fmi2DoStep: more than %ld CVODE steps in the step from t = %.17g to %.17g; "
                     "the FMU holds the state at t = %.17g",
-                    MAX_STEPS_PER_CALL, t, t_end, tret);
+                    MAX_STEPS_PER_CALL, now_abs, t_end_abs, *fmu_time(inst));
             inst->cvode_needs_reinit = 1;
             return fmi2Error;
         }
@@ -450,17 +631,20 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             if (++events > MAX_EVENTS_PER_STEP) {
                 fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
                         "fmi2DoStep: more than %ld events in one step at t = %.17g",
-                        MAX_EVENTS_PER_STEP, tret);
+                        MAX_EVENTS_PER_STEP, *fmu_time(inst));
                 inst->cvode_needs_reinit = 1;
                 return fmi2Error;
             }
             /* the discrete state changed: restart the integrator at the event (auto: with
              * Adams again) */
             restart = fmu_event_update(inst) != 0;
+            if (restart) {
+                peaks_forget(cv); /* what follows the event has a new interpolant */
+            }
         }
         fmi2Status s = fmi2OK;
         if (restart && automatic && cv->method != FMU_CS_ADAMS) {
-            s = cv_create(inst, FMU_CS_ADAMS);
+            s = cv_create(inst, FMU_CS_ADAMS, tret);
             start_segment(cv, tret);
         } else if (restart) {
             cv->counted_steps = 0;
@@ -476,7 +660,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             if (method == cv->method) {
                 continue;
             }
-            s = cv_create(inst, method);
+            s = cv_create(inst, method, tret);
         } else {
             continue;
         }
@@ -485,7 +669,8 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h)
             return fmi2Error;
         }
     }
-    return finish_step(inst, t_end, fmi2OK);
+    /* CVODE warned (logged by error_handler): the step is done, with a caveat */
+    return finish_step(inst, t_end_abs, cv->warnings > warnings ? fmi2Warning : fmi2OK);
 }
 
 fmi2Status cs_reset(fmu_instance_t *inst)

@@ -17,6 +17,11 @@ static int prepare(void *m, char *msg, size_t msg_size)
     return csfh_model_prepare((csfh_model_t *)m, msg, msg_size);
 }
 
+static int check_start(void *m, char *msg, size_t msg_size)
+{
+    return csfh_model_check_start((const csfh_model_t *)m, msg, msg_size);
+}
+
 static void init_discrete(void *mv, char *msg, size_t msg_size)
 {
     csfh_model_t *m = (csfh_model_t *)mv;
@@ -63,7 +68,8 @@ static int outputs(void *mv, char *msg, size_t msg_size)
     const int status = csfh_model_outputs(m);
     const csfh_outputs_t *o = &m->out;
     const double values[] = {o->F_N, o->F_T, o->indentation, o->gap, o->v_T,
-                             o->indentation_rate, o->E_total};
+                             o->indentation_rate, o->E_total, o->F_N_peak, o->F_T_peak,
+                             o->indentation_peak};
     for (size_t i = 0; i < sizeof(values) / sizeof(values[0]); i++) {
         if (!isfinite(values[i])) {
             snprintf(msg, msg_size, "non-finite output at t = %.17g", m->time);
@@ -99,6 +105,74 @@ static void add_integrator_steps(void *mv, long steps)
     m->counters.steps += (int)(steps < room ? steps : room);
 }
 
+static void peaks_begin(void *mv, int outputs_current)
+{
+    csfh_model_t *m = (csfh_model_t *)mv;
+    m->peaks.active = 1;
+    if (outputs_current) {
+        m->peaks.v[0] = m->out.F_N;
+        m->peaks.v[1] = fabs(m->out.F_T);
+        m->peaks.v[2] = m->out.indentation;
+    } else {
+        csfh_model_peak_values(m, m->x, m->peaks.v);
+    }
+}
+
+static int peak_values(void *m, const double *x, double *v)
+{
+    return csfh_model_peak_values((csfh_model_t *)m, x, v);
+}
+
+static void peaks_add(void *mv, const double *v)
+{
+    csfh_model_t *m = (csfh_model_t *)mv;
+    for (int j = 0; j < CSFH_N_PEAKS; j++) {
+        m->peaks.v[j] = v[j] > m->peaks.v[j] ? v[j] : m->peaks.v[j];
+    }
+}
+
+/* Restored FMU state: the fields that are not stored table variables (checked by the glue:
+ * time, states, inputs, parameters, contact.active/onset_speed/onset_time/release_*) and not
+ * recomputed (d, out, der). */
+static int check_state(const void *mv, char *msg, size_t msg_size)
+{
+    const csfh_model_t *m = (const csfh_model_t *)mv;
+    const struct {
+        const char *name;
+        int value;
+    } counts[] = {{"contact.count", m->z.contact_count},
+                  {"diagnostics.rhs_evaluations", m->counters.rhs},
+                  {"diagnostics.flexure_evaluations", m->counters.flexure},
+                  {"diagnostics.contact_evaluations", m->counters.contact},
+                  {"diagnostics.friction_evaluations", m->counters.friction},
+                  {"diagnostics.integrator_steps", m->counters.steps}};
+    for (size_t i = 0; i < sizeof(counts) / sizeof(counts[0]); i++) {
+        if (counts[i].value < 0) {
+            snprintf(msg, msg_size, "%s = %d is negative", counts[i].name, counts[i].value);
+            return -1;
+        }
+    }
+    if (m->peaks.active != 0 && m->peaks.active != 1) {
+        snprintf(msg, msg_size, "peaks.active = %d is not 0 or 1", m->peaks.active);
+        return -1;
+    }
+    static const char *const peak_names[CSFH_N_PEAKS] = {"contact.F_N_peak", "contact.F_T_peak",
+                                                         "contact.indentation_peak"};
+    for (int j = 0; j < CSFH_N_PEAKS; j++) {
+        if (!(isfinite(m->peaks.v[j]) && m->peaks.v[j] >= 0.0)) {
+            snprintf(msg, msg_size, "%s (running peak) = %g is not finite and >= 0", peak_names[j],
+                     m->peaks.v[j]);
+            return -1;
+        }
+    }
+    if (m->contact_by_gap != 0) { /* the RK4 baseline's switch: never set in the FMU */
+        snprintf(msg, msg_size, "contact_by_gap = %d (internal switch of the RK4 baseline) is not 0",
+                 m->contact_by_gap);
+        return -1;
+    }
+    return 0;
+}
+
 const fmu_model_t fmu_model = {
     .guid = CSFH_GUID,
     .model_identifier = CSFH_MODEL_IDENTIFIER,
@@ -112,6 +186,7 @@ const fmu_model_t fmu_model = {
     .der_offset = offsetof(csfh_model_t, der),
     .set_defaults = set_defaults,
     .prepare = prepare,
+    .check_start = check_start,
     .init_discrete = init_discrete,
     .derivatives = derivatives,
     .event_indicators = event_indicators,
@@ -119,4 +194,9 @@ const fmu_model_t fmu_model = {
     .outputs = outputs,
     .add_integrator_steps = add_integrator_steps,
     .cs_method = cs_method,
+    .n_peaks = CSFH_N_PEAKS,
+    .peaks_begin = peaks_begin,
+    .peak_values = peak_values,
+    .peaks_add = peaks_add,
+    .check_state = check_state,
 };

@@ -2,6 +2,7 @@
  * model-exchange functions and FMU state handling. Model-independent: the model is behind the
  * interface of fmu_model.h (csfh: csfh_fmu_model.c, physics in ../core; the comb-drive actuator:
  * ../combdrive/). */
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -54,6 +55,8 @@ void fmu_log(fmu_instance_t *inst, fmi2Status status, unsigned int category, con
 
 #define LOG_ERROR(inst, ...) fmu_log((inst), fmi2Error, LOG_STATUS_ERROR, __VA_ARGS__)
 
+static void states_free_all(fmu_instance_t *inst); /* FMU state section */
+
 static const char *state_name(fmu_state_t s)
 {
     switch (s) {
@@ -105,6 +108,29 @@ void fmu_invalidate(fmu_instance_t *inst)
     inst->derivatives_valid = 0;
 }
 
+/* The relative resolution of a time step below which precision lost to the double time is
+ * reported (fmi2DoStep, fmi2CompletedIntegratorStep): the integration tolerance, but not finer
+ * than TIME_RESOLUTION_FLOOR (one part in a million: a step of 1e-7 s at t = 5 s is resolved to
+ * 1e-8 relative, which no result here notices, and a warning there would be noise). */
+#define TIME_RESOLUTION_FLOOR 1e-6
+
+static double time_resolution_needed(const fmu_instance_t *inst)
+{
+    return inst->tolerance > TIME_RESOLUTION_FLOOR ? inst->tolerance : TIME_RESOLUTION_FLOOR;
+}
+
+/* Model exchange: the time and states the next completed integrator step is compared with
+ * (check_me_time_resolution): set at the end of initialization, at every completed step and
+ * when an FMU state is restored. */
+static void step_reference(fmu_instance_t *inst)
+{
+    inst->last_step_time = *fmu_time(inst);
+    if (fmu_model.n_states > 0) {
+        memcpy(inst->last_step_x, fmu_states(inst), (size_t)fmu_model.n_states * sizeof(double));
+    }
+    inst->last_step_valid = 1;
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* model helpers */
 
@@ -122,6 +148,18 @@ static fmi2Status prepare(fmu_instance_t *inst, const char *function)
     return fmi2OK;
 }
 
+/* The continuous states as text, for messages. */
+static const char *state_text(fmu_instance_t *inst, char *text, size_t size)
+{
+    const double *x = fmu_states(inst);
+    size_t k = 0;
+    text[0] = '\0';
+    for (int i = 0; i < fmu_model.n_states && k + 1 < size; i++) {
+        k += (size_t)snprintf(text + k, size - k, "%s%g", i ? ", " : "", x[i]);
+    }
+    return text;
+}
+
 static fmi2Status update_derivatives(fmu_instance_t *inst, const char *function)
 {
     if (inst->derivatives_valid || fmu_model.n_states == 0) {
@@ -134,13 +172,8 @@ static fmi2Status update_derivatives(fmu_instance_t *inst, const char *function)
     const int status = fmu_model.derivatives(inst->model, x, fmu_derivatives(inst));
     if (status == FMU_MODEL_NONFINITE) {
         char text[MSG_SIZE];
-        size_t k = 0;
-        text[0] = '\0';
-        for (int i = 0; i < fmu_model.n_states && k + 1 < sizeof(text); i++) {
-            k += (size_t)snprintf(text + k, sizeof(text) - k, "%s%g", i ? ", " : "", x[i]);
-        }
         LOG_ERROR(inst, "%s: non-finite derivative at t = %.17g, state [%s]", function,
-                  *fmu_time(inst), text);
+                  *fmu_time(inst), state_text(inst, text, sizeof(text)));
         return fmi2Error;
     }
     inst->derivatives_valid = 1;
@@ -286,9 +319,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     inst->instance_name = (char *)malloc(strlen(instanceName) + 1);
     inst->model = calloc(1, fmu_model.size);
-    if (inst->instance_name == NULL || inst->model == NULL) {
+    inst->last_step_x = (double *)calloc((size_t)fmu_model.n_states + 1, sizeof(double));
+    if (inst->instance_name == NULL || inst->model == NULL || inst->last_step_x == NULL) {
         free(inst->instance_name);
         free(inst->model);
+        free(inst->last_step_x);
         free(inst);
         return NULL;
     }
@@ -313,6 +348,8 @@ void fmi2FreeInstance(fmi2Component c)
         return;
     }
     cs_free(inst);
+    states_free_all(inst); /* FMU states the importer did not free */
+    free(inst->last_step_x);
     free(inst->model);
     free(inst->instance_name);
     free(inst);
@@ -365,18 +402,39 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     if (!allowed(inst, "fmi2ExitInitializationMode", FMU_INITIALIZATION)) {
         return fmi2Error;
     }
-    inst->prepared = 0; /* validate everything once more, whatever was read before */
-    if (prepare(inst, "fmi2ExitInitializationMode") != fmi2OK) {
+    /* a refused call changes nothing: the derived quantities that prepare() computes are put
+     * back if the start state is then refused */
+    void *saved = malloc(fmu_model.size);
+    if (saved == NULL) {
+        LOG_ERROR(inst, "fmi2ExitInitializationMode: out of memory");
         return fmi2Error;
     }
+    memcpy(saved, inst->model, fmu_model.size);
+    const int was_prepared = inst->prepared;
+    inst->prepared = 0; /* validate everything once more, whatever was read before */
     char msg[MSG_SIZE];
     msg[0] = '\0';
+    int refused = prepare(inst, "fmi2ExitInitializationMode") != fmi2OK;
+    if (!refused && fmu_model.check_start != NULL &&
+        fmu_model.check_start(inst->model, msg, sizeof(msg)) != 0) {
+        LOG_ERROR(inst, "fmi2ExitInitializationMode: %s", msg);
+        refused = 1;
+    }
+    if (refused) {
+        memcpy(inst->model, saved, fmu_model.size);
+        inst->prepared = was_prepared;
+    }
+    free(saved);
+    if (refused) {
+        return fmi2Error;
+    }
     fmu_model.init_discrete(inst->model, msg, sizeof(msg));
     fmu_invalidate(inst);
     if (msg[0] != '\0') {
         fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", msg);
     }
     inst->cvode_needs_reinit = 1;
+    step_reference(inst);
     inst->state = inst->type == fmi2ModelExchange ? FMU_EVENT : FMU_STEP_COMPLETE;
     return fmi2OK;
 }
@@ -405,6 +463,8 @@ fmi2Status fmi2Reset(fmi2Component c)
     inst->tolerance = FMU_DEFAULT_TOLERANCE;
     inst->start_time = 0.0;
     inst->stop_time_defined = 0;
+    inst->warned_time = 0;
+    inst->last_step_valid = 0;
     fmu_invalidate(inst);
     inst->state = FMU_INSTANTIATED;
     return fmi2OK;
@@ -523,6 +583,21 @@ static int settable(fmu_instance_t *inst, const csfh_variable_t *v, const char *
     return ok;
 }
 
+/* The i-th value of a set call as a double. */
+static double set_value_at(csfh_type_t type, const void *value, size_t i)
+{
+    if (type == CSFH_TYPE_REAL) {
+        return ((const fmi2Real *)value)[i];
+    }
+    if (type == CSFH_TYPE_BOOLEAN) {
+        return ((const fmi2Boolean *)value)[i] ? 1.0 : 0.0;
+    }
+    return (double)((const fmi2Integer *)value)[i];
+}
+
+/* All or nothing: every value is checked before any is applied, and tunable parameters set while
+ * running are validated together (the model's cross-checks) and rolled back together, so a
+ * rejected call leaves the instance exactly as it was. */
 static fmi2Status set_values(fmu_instance_t *inst, const char *function,
                              const fmi2ValueReference vr[], size_t nvr, csfh_type_t type,
                              const void *value)
@@ -533,66 +608,58 @@ static fmi2Status set_values(fmu_instance_t *inst, const char *function,
     if (nvr > 0 && (!not_null(inst, function, vr, "vr") || !not_null(inst, function, value, "value"))) {
         return fmi2Error;
     }
-    int tunable_changed = 0;
+    char msg[MSG_SIZE];
+    int tunable = 0;
     for (size_t i = 0; i < nvr; i++) {
         const csfh_variable_t *v = lookup(inst, function, vr[i], type);
         if (v == NULL || !settable(inst, v, function)) {
             return fmi2Error;
         }
-        double x;
-        if (type == CSFH_TYPE_REAL) {
-            x = ((const fmi2Real *)value)[i];
-        } else if (type == CSFH_TYPE_BOOLEAN) {
-            x = ((const fmi2Boolean *)value)[i] ? 1.0 : 0.0;
-        } else {
-            x = (double)((const fmi2Integer *)value)[i];
-        }
-        char msg[MSG_SIZE];
-        if (csfh_check_value(v, x, msg, sizeof(msg)) != 0) {
+        if (csfh_check_value(v, set_value_at(type, value, i), msg, sizeof(msg)) != 0) {
             LOG_ERROR(inst, "%s: %s", function, msg);
             return fmi2Error;
         }
-        if (v->causality == CSFH_CAUS_PARAMETER && !(inst->state & (FMU_INSTANTIATED | FMU_INITIALIZATION))) {
-            /* a tunable parameter while running: apply, re-validate, roll back on failure */
-            void *saved = malloc(fmu_model.size);
-            if (saved == NULL) {
-                LOG_ERROR(inst, "%s: out of memory", function);
-                return fmi2Error;
-            }
-            memcpy(saved, inst->model, fmu_model.size);
-            if (type == CSFH_TYPE_REAL) {
-                *real_of(inst, v) = x;
-            } else {
-                *int_of(inst, v) = (int)x;
-            }
-            const int failed = fmu_model.prepare(inst->model, msg, sizeof(msg)) != 0;
-            if (failed) {
-                memcpy(inst->model, saved, fmu_model.size);
-            }
-            free(saved);
-            if (failed) {
-                LOG_ERROR(inst, "%s: %s", function, msg);
-                return fmi2Error;
-            }
-            tunable_changed = 1;
-            continue;
+        tunable = tunable || (v->causality == CSFH_CAUS_PARAMETER &&
+                              !(inst->state & (FMU_INSTANTIATED | FMU_INITIALIZATION)));
+    }
+    void *saved = NULL;
+    if (tunable) { /* tunable parameters while running: apply, re-validate, roll back on failure */
+        saved = malloc(fmu_model.size);
+        if (saved == NULL) {
+            LOG_ERROR(inst, "%s: out of memory", function);
+            return fmi2Error;
         }
+        memcpy(saved, inst->model, fmu_model.size);
+    }
+    int restart = tunable, parameter = 0;
+    for (size_t i = 0; i < nvr; i++) {
+        const csfh_variable_t *v = lookup(inst, function, vr[i], type);
+        const double x = set_value_at(type, value, i);
         const double old = type == CSFH_TYPE_REAL ? *real_of(inst, v) : (double)*int_of(inst, v);
         if (type == CSFH_TYPE_REAL) {
             *real_of(inst, v) = x;
         } else {
             *int_of(inst, v) = (int)x;
         }
-        if (v->causality == CSFH_CAUS_PARAMETER) {
-            inst->prepared = 0;
-        }
+        parameter = parameter || v->causality == CSFH_CAUS_PARAMETER;
         /* a new state, or a new input value (inputs are held constant over a communication step,
          * so a change is a discontinuity of the right-hand side): restart the CS integrator */
-        if (v->is_state || (v->causality == CSFH_CAUS_INPUT && old != x)) {
-            inst->cvode_needs_reinit = 1;
-        }
+        restart = restart || v->is_state || (v->causality == CSFH_CAUS_INPUT && old != x);
     }
-    if (tunable_changed) {
+    if (tunable) {
+        const int failed = fmu_model.prepare(inst->model, msg, sizeof(msg)) != 0;
+        if (failed) {
+            memcpy(inst->model, saved, fmu_model.size);
+        }
+        free(saved);
+        if (failed) {
+            LOG_ERROR(inst, "%s: %s", function, msg);
+            return fmi2Error;
+        }
+    } else if (parameter) {
+        inst->prepared = 0;
+    }
+    if (restart) {
         inst->cvode_needs_reinit = 1;
     }
     fmu_invalidate(inst);
@@ -671,20 +738,28 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 /* FMU state */
 
 #define FMU_STATE_MAGIC 0x48465343u /* "CSFH" */
-#define FMU_STATE_VERSION 2u
+#define FMU_STATE_VERSION 3u
 
-/* An FMU state: this header, then the model struct (fmu_model.size bytes). */
+/* An FMU state: this header, then the model struct (fmu_model.size bytes). The header holds no
+ * enum types: its bytes may come from anywhere (fmi2DeSerializeFMUstate), and every field is
+ * checked before it is used. */
 typedef struct {
     unsigned int magic;
     unsigned int version;
     unsigned int size; /* of the whole snapshot */
     char guid[40];
-    fmi2Type type;
-    fmu_state_t state;
-    int prepared;
+    int type;           /* fmi2Type */
+    unsigned int state; /* fmu_state_t */
+    int prepared;       /* not trusted: the parameters are validated again on restore */
     int warned_outputs;
     unsigned char model[];
 } fmu_snapshot_t;
+
+/* The instance states a restored FMU state may put an instance of each type into: those this
+ * FMU can be in while the importer may call fmi2GetFMUstate (FMU_ERROR is never entered). */
+#define ME_RESTORABLE (FMU_INSTANTIATED | FMU_INITIALIZATION | FMU_EVENT | FMU_CONTINUOUS | FMU_TERMINATED)
+#define CS_RESTORABLE                                                                          \
+    (FMU_INSTANTIATED | FMU_INITIALIZATION | FMU_STEP_COMPLETE | FMU_STEP_FAILED | FMU_TERMINATED)
 
 static size_t snapshot_size(void)
 {
@@ -698,46 +773,135 @@ static void snapshot_take(const fmu_instance_t *inst, fmu_snapshot_t *s)
     s->version = FMU_STATE_VERSION;
     s->size = (unsigned int)snapshot_size();
     strncpy(s->guid, fmu_model.guid, sizeof(s->guid) - 1);
-    s->type = inst->type;
-    s->state = inst->state;
+    s->type = (int)inst->type;
+    s->state = (unsigned int)inst->state;
     s->prepared = inst->prepared;
     s->warned_outputs = inst->warned_outputs;
     memcpy(s->model, inst->model, fmu_model.size);
 }
 
-/* Is the header that of a state of this FMU? (Only the header is read.) */
-static int snapshot_valid(const fmu_snapshot_t *s)
+/* FMU states of this instance: fmi2GetFMUstate and fmi2DeSerializeFMUstate register what they
+ * allocate, fmi2FreeFMUstate forgets it, fmi2FreeInstance frees what is left. Any other pointer
+ * is refused before a byte of it is read. */
+static long state_index(const fmu_instance_t *inst, const void *s)
 {
-    return s->magic == FMU_STATE_MAGIC && s->version == FMU_STATE_VERSION &&
-           s->size == snapshot_size() && strncmp(s->guid, fmu_model.guid, sizeof(s->guid)) == 0;
+    for (size_t i = 0; i < inst->n_fmu_states; i++) {
+        if (inst->fmu_states[i] == s) {
+            return (long)i;
+        }
+    }
+    return -1;
 }
 
-/* A state can only be restored into an instance of the same kind (ME or CS). */
-static int snapshot_fits(const fmu_instance_t *inst, const fmu_snapshot_t *s, const char *function)
+static int state_register(fmu_instance_t *inst, void *s)
 {
-    if (!snapshot_valid(s)) {
-        fmu_log((fmu_instance_t *)inst, fmi2Error, LOG_STATUS_ERROR,
-                "%s: the given FMUstate was not made by this FMU", function);
-        return 0;
+    if (inst->n_fmu_states == inst->cap_fmu_states) {
+        const size_t cap = inst->cap_fmu_states > 0 ? 2 * inst->cap_fmu_states : 8;
+        void **grown = (void **)realloc(inst->fmu_states, cap * sizeof(void *));
+        if (grown == NULL) {
+            return -1;
+        }
+        inst->fmu_states = grown;
+        inst->cap_fmu_states = cap;
     }
-    if (s->type != inst->type) {
-        fmu_log((fmu_instance_t *)inst, fmi2Error, LOG_STATUS_ERROR,
-                "%s: the FMUstate was made by a %s instance, this one is %s", function,
-                s->type == fmi2ModelExchange ? "model-exchange" : "co-simulation",
-                inst->type == fmi2ModelExchange ? "model-exchange" : "co-simulation");
+    inst->fmu_states[inst->n_fmu_states++] = s;
+    return 0;
+}
+
+static void states_free_all(fmu_instance_t *inst)
+{
+    for (size_t i = 0; i < inst->n_fmu_states; i++) {
+        free(inst->fmu_states[i]);
+    }
+    free(inst->fmu_states);
+    inst->fmu_states = NULL;
+    inst->n_fmu_states = inst->cap_fmu_states = 0;
+}
+
+/* Is FMUstate one of this instance's states? Logs an error if not. */
+static int state_owned(fmu_instance_t *inst, const void *FMUstate, const char *function)
+{
+    if (state_index(inst, FMUstate) < 0) {
+        LOG_ERROR(inst, "%s: the FMUstate was not made by this instance (fmi2GetFMUstate or "
+                        "fmi2DeSerializeFMUstate), or was freed; states move between instances "
+                        "as serialized bytes",
+                  function);
         return 0;
     }
     return 1;
 }
 
-static void snapshot_restore(fmu_instance_t *inst, const fmu_snapshot_t *s)
+/* Check a snapshot as if its content were set with fmi2Set* (the same table checks and model
+ * checks; the instance is not touched):
+ *   header      magic, version, size, GUID; made by an instance of the same type (ME or CS);
+ *               its instance state one that this type can be in (ME_RESTORABLE/CS_RESTORABLE);
+ *   variables   every stored (not computed) variable of the table, i.e. time, states, inputs,
+ *               parameters, discrete states, counters: finite and in its range (enumerations,
+ *               Booleans 0/1, declared min/max), as fmi2Set* checks parameters;
+ *   model       the model's own checks of what is not a table variable (fmu_model.check_state);
+ *   prepare     after initialization, the model's cross-checks (e.g. R1 < R2), with the derived
+ *               quantities recomputed, never taken from the bytes; before it, they are
+ *               recomputed at the first use as for any parameter set then.
+ * The checked model is left in `model` (fmu_model.size bytes) and *prepared says whether its
+ * derived quantities are valid. Returns 0, or -1 after logging an error naming the variable and
+ * its value. */
+static int snapshot_check(fmu_instance_t *inst, const fmu_snapshot_t *s, void *model,
+                          int *prepared, const char *function)
 {
-    inst->state = s->state;
-    inst->prepared = s->prepared;
-    inst->warned_outputs = s->warned_outputs;
-    memcpy(inst->model, s->model, fmu_model.size);
-    inst->cvode_needs_reinit = 1;
-    fmu_invalidate(inst);
+    if (s->magic != FMU_STATE_MAGIC || s->version != FMU_STATE_VERSION ||
+        s->size != snapshot_size() || strncmp(s->guid, fmu_model.guid, sizeof(s->guid)) != 0) {
+        LOG_ERROR(inst, "%s: the bytes are not a state of this FMU (header: magic, version, size "
+                        "or GUID)", function);
+        return -1;
+    }
+    if (s->type != (int)fmi2ModelExchange && s->type != (int)fmi2CoSimulation) {
+        LOG_ERROR(inst, "%s: the FMUstate's instance type %d is neither model exchange nor "
+                        "co-simulation", function, s->type);
+        return -1;
+    }
+    if (s->type != (int)inst->type) {
+        LOG_ERROR(inst, "%s: the FMUstate was made by a %s instance, this one is %s", function,
+                  s->type == (int)fmi2ModelExchange ? "model-exchange" : "co-simulation",
+                  inst->type == fmi2ModelExchange ? "model-exchange" : "co-simulation");
+        return -1;
+    }
+    const unsigned int restorable = inst->type == fmi2ModelExchange ? ME_RESTORABLE : CS_RESTORABLE;
+    const unsigned int st = s->state;
+    if (st == 0 || (st & (st - 1)) != 0 || (st & restorable) == 0) { /* exactly one valid bit */
+        LOG_ERROR(inst, "%s: the FMUstate's instance state %u is not a state a %s instance can "
+                        "be restored to", function, st,
+                  inst->type == fmi2ModelExchange ? "model-exchange" : "co-simulation");
+        return -1;
+    }
+    if (s->warned_outputs != 0 && s->warned_outputs != 1) {
+        LOG_ERROR(inst, "%s: the FMUstate's output-warning flag %d is not 0 or 1", function,
+                  s->warned_outputs);
+        return -1;
+    }
+    memcpy(model, s->model, fmu_model.size);
+    char msg[MSG_SIZE];
+    for (int i = 0; i < fmu_model.n_variables; i++) {
+        const csfh_variable_t *v = &fmu_model.variables[i];
+        if (v->storage != CSFH_STORE_PLAIN || v->causality == CSFH_CAUS_CALCULATED_PARAMETER) {
+            continue; /* recomputed before it is read */
+        }
+        const void *at = (const char *)model + v->offset;
+        const double value = v->type == CSFH_TYPE_REAL ? *(const double *)at : (double)*(const int *)at;
+        if (csfh_check_value(v, value, msg, sizeof(msg)) != 0) {
+            LOG_ERROR(inst, "%s: FMUstate: %s", function, msg);
+            return -1;
+        }
+    }
+    if (fmu_model.check_state != NULL && fmu_model.check_state(model, msg, sizeof(msg)) != 0) {
+        LOG_ERROR(inst, "%s: FMUstate: %s", function, msg);
+        return -1;
+    }
+    *prepared = fmu_model.prepare(model, msg, sizeof(msg)) == 0;
+    if (!*prepared && !(st & (FMU_INSTANTIATED | FMU_INITIALIZATION))) {
+        LOG_ERROR(inst, "%s: FMUstate: %s", function, msg);
+        return -1;
+    }
+    return 0;
 }
 
 #define STATE_STATES                                                                           \
@@ -754,12 +918,12 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     fmu_snapshot_t *s = (fmu_snapshot_t *)*FMUstate;
     if (s == NULL) {
         s = (fmu_snapshot_t *)calloc(1, snapshot_size());
-        if (s == NULL) {
+        if (s == NULL || state_register(inst, s) != 0) {
+            free(s);
             LOG_ERROR(inst, "fmi2GetFMUstate: out of memory");
             return fmi2Error;
         }
-    } else if (!snapshot_valid(s)) {
-        LOG_ERROR(inst, "fmi2GetFMUstate: the given FMUstate was not made by this FMU");
+    } else if (!state_owned(inst, s, "fmi2GetFMUstate")) {
         return fmi2Error;
     }
     snapshot_take(inst, s);
@@ -776,14 +940,29 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
     fmu_instance_t *inst = (fmu_instance_t *)c;
     if (!allowed(inst, "fmi2SetFMUstate", STATE_STATES) ||
-        !not_null(inst, "fmi2SetFMUstate", FMUstate, "FMUstate")) {
+        !not_null(inst, "fmi2SetFMUstate", FMUstate, "FMUstate") ||
+        !state_owned(inst, FMUstate, "fmi2SetFMUstate")) {
         return fmi2Error;
     }
     const fmu_snapshot_t *s = (const fmu_snapshot_t *)FMUstate;
-    if (!snapshot_fits(inst, s, "fmi2SetFMUstate")) {
+    void *model = malloc(fmu_model.size);
+    if (model == NULL) {
+        LOG_ERROR(inst, "fmi2SetFMUstate: out of memory");
         return fmi2Error;
     }
-    snapshot_restore(inst, s);
+    int prepared = 0;
+    if (snapshot_check(inst, s, model, &prepared, "fmi2SetFMUstate") != 0) {
+        free(model); /* the instance is unchanged */
+        return fmi2Error;
+    }
+    free(inst->model);
+    inst->model = model;
+    inst->state = (fmu_state_t)s->state;
+    inst->prepared = prepared;
+    inst->warned_outputs = s->warned_outputs;
+    step_reference(inst);
+    inst->cvode_needs_reinit = 1;
+    fmu_invalidate(inst);
     return fmi2OK;
 }
 
@@ -796,7 +975,13 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     if (FMUstate == NULL || *FMUstate == NULL) {
         return fmi2OK;
     }
+    const long i = state_index(inst, *FMUstate);
+    if (i < 0) {
+        state_owned(inst, *FMUstate, "fmi2FreeFMUstate"); /* logs */
+        return fmi2Error;
+    }
     free(*FMUstate);
+    inst->fmu_states[i] = inst->fmu_states[--inst->n_fmu_states];
     *FMUstate = NULL;
     return fmi2OK;
 }
@@ -806,7 +991,8 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, si
     fmu_instance_t *inst = (fmu_instance_t *)c;
     if (!allowed(inst, "fmi2SerializedFMUstateSize", STATE_STATES) ||
         !not_null(inst, "fmi2SerializedFMUstateSize", FMUstate, "FMUstate") ||
-        !not_null(inst, "fmi2SerializedFMUstateSize", size, "size")) {
+        !not_null(inst, "fmi2SerializedFMUstateSize", size, "size") ||
+        !state_owned(inst, FMUstate, "fmi2SerializedFMUstateSize")) {
         return fmi2Error;
     }
     *size = snapshot_size();
@@ -819,7 +1005,8 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
     fmu_instance_t *inst = (fmu_instance_t *)c;
     if (!allowed(inst, "fmi2SerializeFMUstate", STATE_STATES) ||
         !not_null(inst, "fmi2SerializeFMUstate", FMUstate, "FMUstate") ||
-        !not_null(inst, "fmi2SerializeFMUstate", serializedState, "serializedState")) {
+        !not_null(inst, "fmi2SerializeFMUstate", serializedState, "serializedState") ||
+        !state_owned(inst, FMUstate, "fmi2SerializeFMUstate")) {
         return fmi2Error;
     }
     if (size < snapshot_size()) {
@@ -831,6 +1018,8 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
     return fmi2OK;
 }
 
+/* The bytes get the same checks as fmi2SetFMUstate gives them (snapshot_check): a state that
+ * could not be restored into this instance is refused here already. */
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate)
 {
@@ -840,22 +1029,29 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
         !not_null(inst, "fmi2DeSerializeFMUstate", FMUstate, "FMUstate")) {
         return fmi2Error;
     }
-    fmu_snapshot_t header;
     if (size != snapshot_size()) {
         LOG_ERROR(inst, "fmi2DeSerializeFMUstate: size = %zu, expected %zu", size, snapshot_size());
         return fmi2Error;
     }
-    memcpy(&header, serializedState, sizeof(header));
-    if (!snapshot_valid(&header)) {
-        LOG_ERROR(inst, "fmi2DeSerializeFMUstate: the bytes are not a state of this FMU");
-        return fmi2Error;
-    }
     fmu_snapshot_t *s = (fmu_snapshot_t *)calloc(1, snapshot_size());
-    if (s == NULL) {
+    void *model = malloc(fmu_model.size);
+    if (s == NULL || model == NULL) {
+        free(s);
+        free(model);
         LOG_ERROR(inst, "fmi2DeSerializeFMUstate: out of memory");
         return fmi2Error;
     }
-    memcpy(s, serializedState, snapshot_size());
+    memcpy(s, serializedState, snapshot_size()); /* aligned from here on */
+    int prepared = 0;
+    const int bad = snapshot_check(inst, s, model, &prepared, "fmi2DeSerializeFMUstate") != 0;
+    free(model);
+    if (bad || state_register(inst, s) != 0) {
+        if (!bad) {
+            LOG_ERROR(inst, "fmi2DeSerializeFMUstate: out of memory");
+        }
+        free(s);
+        return fmi2Error;
+    }
     *FMUstate = s;
     return fmi2OK;
 }
@@ -910,11 +1106,20 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
         !not_null(inst, "fmi2NewDiscreteStates", eventInfo, "eventInfo")) {
         return fmi2Error;
     }
-    fmu_event_update(inst);
+    const int mode_changed = fmu_event_update(inst) != 0;
     eventInfo->newDiscreteStatesNeeded = fmi2False;
     eventInfo->terminateSimulation = fmi2False;
     eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
-    eventInfo->valuesOfContinuousStatesChanged = fmi2False; /* contact events never jump states */
+    /* The states keep their values at a contact event, but the right-hand side switches (the
+     * contact force acts in the contact mode only), so the importer's integrator must restart
+     * here: what it computed past the event used the other mode, and a multistep history
+     * reaching across the switch is wrong. FMI 2.0 has no separate "restart" flag, and importers
+     * restart when this flag is set (e.g. Reference-FMUs' fmusim restarts only then), so it is
+     * set at every mode switch, and only then. The states returned are the unchanged ones, and
+     * the event indicator keeps its sign across the switch (hysteresis), so re-reading them
+     * cannot start another event: the event iteration ends (README, "Using the FMU in other
+     * tools"). */
+    eventInfo->valuesOfContinuousStatesChanged = mode_changed ? fmi2True : fmi2False;
     eventInfo->nextEventTimeDefined = fmi2False;
     eventInfo->nextEventTime = 0.0;
     return fmi2OK;
@@ -931,6 +1136,42 @@ fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
     return fmi2OK;
 }
 
+/* Model exchange and large times: the importer integrates in its own time, and the model is
+ * autonomous (the time only stamps the recorded onset and release times), so the FMU's
+ * derivatives, event indicators and outputs do not depend on the start time at all; what the
+ * FMU can promise is to report what it sees of the importer's time losing precision. At every
+ * completed integrator step it compares the time with the previous completed step's: if the
+ * states moved but the double time represents the increment dt worse than the tolerance
+ * (ulp(t) > max(tolerance, 1e-6) * dt, including dt = 0: steps below the resolution of t), it
+ * returns fmi2Warning (logged once per instance). A time that went backwards (the importer
+ * rolled its integrator back) is not judged. */
+static fmi2Status check_me_time_resolution(fmu_instance_t *inst)
+{
+    const double t = *fmu_time(inst);
+    const double *x = fmu_states(inst);
+    const size_t bytes = (size_t)fmu_model.n_states * sizeof(double);
+    fmi2Status status = fmi2OK;
+    if (inst->last_step_valid && bytes > 0) {
+        const double dt = t - inst->last_step_time;
+        const double ulp = nextafter(fabs(t), INFINITY) - fabs(t);
+        const int moved = memcmp(x, inst->last_step_x, bytes) != 0;
+        if (moved && dt >= 0.0 && ulp > time_resolution_needed(inst) * dt) {
+            status = fmi2Warning;
+            if (!inst->warned_time) {
+                inst->warned_time = 1;
+                fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING,
+                        "fmi2CompletedIntegratorStep: the time t = %.17g resolves steps to %g s "
+                        "only; the integrator step from t = %.17g (dt = %g s) is represented to "
+                        "worse than %g relative: integrate in a time measured from a nearer "
+                        "origin (further such steps return fmi2Warning without a message)",
+                        t, ulp, inst->last_step_time, dt, time_resolution_needed(inst));
+            }
+        }
+    }
+    step_reference(inst);
+    return status;
+}
+
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
 {
@@ -944,7 +1185,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
     }
     *enterEventMode = fmi2False;
     *terminateSimulation = fmi2False;
-    return fmi2OK;
+    return check_me_time_resolution(inst);
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
@@ -1027,6 +1268,15 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], s
     }
     if (ni > 0) {
         fmu_model.event_indicators(inst->model, fmu_states(inst), eventIndicators);
+    }
+    for (size_t i = 0; i < ni; i++) {
+        if (!isfinite(eventIndicators[i])) {
+            char text[MSG_SIZE];
+            LOG_ERROR(inst, "fmi2GetEventIndicators: non-finite event indicator z[%zu] = %g at "
+                            "t = %.17g, state [%s]",
+                      i, eventIndicators[i], *fmu_time(inst), state_text(inst, text, sizeof(text)));
+            return fmi2Error;
+        }
     }
     return fmi2OK;
 }
@@ -1112,6 +1362,70 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
     return fmi2Error;
 }
 
+/* Round-off allowed in a master's time arithmetic (fmi2DoStep): a currentCommunicationPoint t
+ * is the FMU's time T if |t - T| <= COMM_POINT_ROUNDOFF * max(|t|, |T|), i.e. a few units in the
+ * last place (4 to 8 ulp): what t0 + k h against t_(k-1) + h, or integer nanoseconds converted to
+ * seconds, give. */
+#define COMM_POINT_ROUNDOFF (16.0 * DBL_EPSILON)
+
+/* The step's arguments against the FMU's time T: the communication point t must be T up to
+ * round-off (COMM_POINT_ROUNDOFF; a t behind T would take the time backwards, one ahead would
+ * skip an interval), the step h finite and >= 0, and the end t + h (computed as the master
+ * computes it) finite and, for h > 0, later than T. The FMU integrates from its own time T to
+ * t + h, so its time never goes backwards. A refused step is fmi2Error and changes nothing.
+ * Precision lost: if the double time represents the step T -> t + h worse than the integration
+ * tolerance (|(t + h - T) - h| > max(tolerance, 1e-6) h, e.g. h = 1e-3 s at t = 1e10 s, where
+ * the resolution is 1.9e-6 s), the step is taken and reported with fmi2Warning (logged once). */
+static fmi2Status check_step(fmu_instance_t *inst, double t, double h, double *t_end)
+{
+    const double T = *fmu_time(inst);
+    if (!isfinite(t) || !isfinite(h) || h < 0.0) {
+        LOG_ERROR(inst, "fmi2DoStep: currentCommunicationPoint = %g, communicationStepSize = %g "
+                        "must be finite and the step >= 0",
+                  t, h);
+        return fmi2Error;
+    }
+    if (fabs(t - T) > COMM_POINT_ROUNDOFF * fmax(fabs(t), fabs(T))) {
+        LOG_ERROR(inst, "fmi2DoStep: currentCommunicationPoint = %.17g does not match the FMU time "
+                        "%.17g (%s by %.3g s; allowed: round-off, %.3g s)",
+                  t, T, t < T ? "behind" : "ahead", fabs(t - T),
+                  COMM_POINT_ROUNDOFF * fmax(fabs(t), fabs(T)));
+        return fmi2Error;
+    }
+    *t_end = t + h;
+    if (h == 0.0) {
+        return fmi2OK;
+    }
+    if (!isfinite(*t_end)) {
+        LOG_ERROR(inst, "fmi2DoStep: currentCommunicationPoint + communicationStepSize = %.17g + "
+                        "%g is not finite", t, h);
+        return fmi2Error;
+    }
+    if (!(*t_end > T)) {
+        LOG_ERROR(inst, "fmi2DoStep: communicationStepSize = %g at t = %.17g is below the "
+                        "resolution of the time (%g s): t + h = %.17g does not advance the FMU "
+                        "time %.17g",
+                  h, t, nextafter(fabs(T), INFINITY) - fabs(T), *t_end, T);
+        return fmi2Error;
+    }
+    const double taken = *t_end - T;
+    if (fabs(taken - h) > time_resolution_needed(inst) * h) {
+        if (!inst->warned_time) {
+            inst->warned_time = 1;
+            fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING,
+                    "fmi2DoStep: the time t = %.17g resolves steps to %g s only: "
+                    "communicationStepSize = %.17g is taken as %.17g (relative difference %.3g > "
+                    "%g); the FMU integrates exactly that step, but the communication points are "
+                    "not where the master meant them (further such steps return fmi2Warning "
+                    "without a message)",
+                    T, nextafter(fabs(*t_end), INFINITY) - fabs(*t_end), h, taken,
+                    fabs(taken - h) / h, time_resolution_needed(inst));
+        }
+        return fmi2Warning;
+    }
+    return fmi2OK;
+}
+
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
@@ -1120,18 +1434,21 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     if (!allowed(inst, "fmi2DoStep", FMU_STEP_COMPLETE) || !is_cs(inst, "fmi2DoStep")) {
         return fmi2Error;
     }
-    if (!isfinite(currentCommunicationPoint) || !isfinite(communicationStepSize) ||
-        communicationStepSize < 0.0) {
-        LOG_ERROR(inst, "fmi2DoStep: currentCommunicationPoint = %g, communicationStepSize = %g "
-                        "must be finite and the step >= 0",
-                  currentCommunicationPoint, communicationStepSize);
-        return fmi2Error;
+    double t_end = 0.0;
+    const fmi2Status checked = check_step(inst, currentCommunicationPoint, communicationStepSize,
+                                          &t_end);
+    if (checked > fmi2Warning) {
+        return checked; /* refused: the instance is unchanged and still usable */
     }
-    const fmi2Status status = cs_do_step(inst, currentCommunicationPoint, communicationStepSize);
+    if (communicationStepSize == 0.0) {
+        return fmi2OK;
+    }
+    const fmi2Status status = cs_do_step(inst, t_end);
     if (status > fmi2Warning) {
         inst->state = FMU_STEP_FAILED;
+        return status;
     }
-    return status;
+    return status > checked ? status : checked;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c)

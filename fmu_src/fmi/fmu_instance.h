@@ -54,6 +54,17 @@ typedef struct {
     csfh_cvode_t *cvode;
     int cvode_needs_reinit; /* restart CVODE: states, inputs or tunable parameters were changed
                                from outside, an FMU state was taken or restored */
+    /* FMU states made by this instance (fmi2GetFMUstate, fmi2DeSerializeFMUstate) and not yet
+     * freed by fmi2FreeFMUstate: only these are accepted, fmi2FreeInstance frees the rest */
+    void **fmu_states;
+    size_t n_fmu_states, cap_fmu_states;
+    /* time resolution: the warning that the double time does not resolve the steps was logged;
+     * model exchange: time and states at the last fmi2CompletedIntegratorStep (last_step_x:
+     * n_states doubles) */
+    int warned_time;
+    int last_step_valid;
+    double last_step_time;
+    double *last_step_x;
 } fmu_instance_t;
 
 void fmu_log(fmu_instance_t *inst, fmi2Status status, unsigned int category, const char *fmt, ...)
@@ -88,7 +99,8 @@ static inline double *fmu_derivatives(fmu_instance_t *inst)
 
 /* Co-simulation (cosimulation.c). */
 void cs_free(fmu_instance_t *inst);
-fmi2Status cs_do_step(fmu_instance_t *inst, double t, double h);
+/* Integrate from the FMU's time to t_end (> the FMU's time; fmi2DoStep checked the arguments). */
+fmi2Status cs_do_step(fmu_instance_t *inst, double t_end);
 fmi2Status cs_reset(fmu_instance_t *inst);
 
 #endif

@@ -28,6 +28,8 @@
 #define FMU_CS_BDF 1   /* BDF, Newton iteration, dense linear solver */
 #define FMU_CS_ADAMS 2 /* Adams-Moulton, fixed-point iteration */
 
+#define FMU_MAX_PEAKS 8 /* peak outputs tracked by the co-simulation stepper */
+
 typedef struct {
     const char *guid;
     const char *model_identifier;
@@ -45,6 +47,9 @@ typedef struct {
     /* Validate every parameter, input and state start value, compute derived quantities.
      * 0, or -1 with a message naming the variable and its value. */
     int (*prepare)(void *m, char *msg, size_t msg_size);
+    /* End of initialization, after prepare: check the start state (may be NULL); 0, or -1 with
+     * a message naming the values. */
+    int (*check_start)(void *m, char *msg, size_t msg_size);
     /* End of initialization: set the discrete state from the initial continuous state. Writes a
      * logEvents message (or an empty string). */
     void (*init_discrete)(void *m, char *msg, size_t msg_size);
@@ -64,6 +69,24 @@ typedef struct {
     void (*add_integrator_steps)(void *m, long steps);
     /* The co-simulation method, FMU_CS_AUTO, FMU_CS_BDF or FMU_CS_ADAMS (NULL: BDF). */
     int (*cs_method)(const void *m);
+    /* Peak outputs of co-simulation (all NULL and n_peaks 0: none): the co-simulation stepper
+     * tracks the largest values of n_peaks (<= FMU_MAX_PEAKS) quantities over each
+     * communication step on CVODE's interpolant. peaks_begin starts a communication step with
+     * the values at the current state (taken from the outputs when outputs_current, else
+     * evaluated), peak_values gives the quantities at state x with the current discrete state
+     * (returns 0, without evaluating, when they are all 0: nothing to track), peaks_add takes
+     * values in. */
+    int n_peaks;
+    void (*peaks_begin)(void *m, int outputs_current);
+    int (*peak_values)(void *m, const double *x, double *v);
+    void (*peaks_add)(void *m, const double *v);
+    /* A restored FMU state (fmi2SetFMUstate, fmi2DeSerializeFMUstate): check the fields of the
+     * model struct that are neither stored table variables (the glue checks those: finite, in
+     * range) nor recomputed (derived quantities, outputs, derivative cache), e.g. counts that
+     * must be >= 0 and internal flags. 0, or -1 with a message naming the field and its value.
+     * NULL when there are no such fields. Every new field of the model struct must be covered
+     * by one of the three. */
+    int (*check_state)(const void *m, char *msg, size_t msg_size);
 } fmu_model_t;
 
 /* Defined by the model adapter linked into the FMU binary. */

@@ -14,6 +14,9 @@ from .simulate import simulate
 
 @dataclass
 class Comparison:
+    """What :func:`compare` ran and wrote: the scene, one :class:`Trajectory` per model, and
+    the files (CSV, summary.json, figures)."""
+
     scene: Scene
     runs: list[Trajectory]
     files: list[Path]

@@ -51,7 +51,8 @@ Scene section (all keys optional except the voltage ramp):
 
 The rest of the scene (initial state, parts, parameters, stop_time, preset) sets up the hinge as
 for every other command; its contact law is the scene's (the FMU default LN_spheres unless
-[parameters] sets contact.law). libcosim (libcosimpy 0.0.6) ignores FMI 2.0 Enumeration
+[parameters] sets contact.law; the libcosimpy engine sets its Integer twin contact.law_number).
+libcosim (libcosimpy 0.0.6) ignores FMI 2.0 Enumeration
 variables, so with that engine an enumeration can only keep its FMU start value.
 """
 
@@ -617,12 +618,16 @@ def run_libcosimpy(
         for name, value in values.items():
             var = variables[name]
             if var.type == "Enumeration":
-                if int(value) != int(var.start):
+                # libcosimpy ignores FMI 2.0 Enumeration variables: set its Integer twin
+                if f"{name}_number" in refs:
+                    name, var = f"{name}_number", variables[f"{name}_number"]
+                elif int(value) != int(var.start):
                     raise CosimError(
                         f"libcosimpy ignores FMI 2.0 Enumeration variables: {name} = {value} "
                         f"cannot be set (the FMU default is {var.start}); use the fmpy engine"
                     )
-                continue
+                else:
+                    continue
             if var.type == "Real":
                 ok = ex.real_initial_value(slave, refs[name], float(value))
             elif var.type == "Boolean":
@@ -695,7 +700,14 @@ def cosimulate(
     stop_time: float | None = None,
     quiet: bool = True,
 ) -> Trajectory:
-    """Co-simulate the scene's hinge with its comb-drive actuator ([cosim] section)."""
+    """Co-simulate the scene's hinge with its comb-drive actuator, as set up by the scene's
+    ``[cosim]`` section (see this module's docstring for its keys), and return the
+    :class:`Trajectory` of the hinge's outputs at the communication points, with the voltage
+    ``V`` and the actuator's ``F_act``, ``F_x``, ``F_y``, ``M``.
+
+    `engine` (``"fmpy"`` or ``"libcosimpy"``), `step` (s) and `ordering` (``"jacobi"`` or
+    ``"gauss-seidel"``, fmpy only) override the scene's settings, `stop_time` its stop time.
+    Raises :class:`SceneError` for bad settings and :class:`CosimError` when an FMU fails."""
     settings = cosim_settings(scene, engine=engine, step=step, ordering=ordering)
     progress = Progress(f"{scene.name}: cosim {settings.engine}", quiet=quiet)
     try:

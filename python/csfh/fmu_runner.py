@@ -182,12 +182,14 @@ def simulate_me(
     parameters: dict[str, Any] | None = None,
     output_times: np.ndarray | None = None,
     progress: Progress | None = None,
+    max_steps: int = 5_000_000,
 ) -> Trajectory:
     """Model exchange of the FMU with contact law `law`, CVode (BDF) via fmpy, events located by
     root finding on the gap. Returns the output table (the grid k * output_interval, or the given
     increasing `output_times`, plus the event instants), per-step records (the first
     `max_step_records` steps), per-contact records (peaks located on CVODE's interpolant) and
-    statistics."""
+    statistics. More than `max_steps` CVODE steps (the budget: minutes of Python) raise
+    SimulationError, so that no input makes the run hang."""
     if law not in model_info.LAWS:
         raise ValueError(f"law {law!r} is not an event-driven law ({', '.join(model_info.LAWS)})")
     from fmpy.sundials.cvode import CV_ROOT_RETURN, CVode
@@ -285,6 +287,7 @@ def simulate_me(
             grid = grid[(grid > 0) & (grid <= t_end * (1 + 1e-12))]
         i_out = 0
         n_steps_total = 0
+        n_calls = 0
         n_events = 0
         tret = realtype(0.0)
         nst = c_long(0)
@@ -296,6 +299,12 @@ def simulate_me(
                     f"{law}: CVode failed at t = {t:.9g} s (flag {flag}): {info[3]}"
                 )
             t_new = tret.value
+            n_calls += 1  # one CVODE step per call (CV_ONE_STEP)
+            if n_calls > max_steps:
+                raise SimulationError(
+                    f"{law}: more than {max_steps} CVODE steps (the step budget) by t = "
+                    f"{t_new:.9g} s of {t_end:g} s"
+                )
             # outputs on the regular grid inside the step, from CVODE's interpolant
             while i_out < len(grid) and grid[i_out] <= t_new * (1 + 1e-14):
                 table.add([float(grid[i_out]), *interpolated(float(grid[i_out]), out_vrs)])

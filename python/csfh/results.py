@@ -61,13 +61,18 @@ class Trajectory:
     contact_records: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __getitem__(self, column: str) -> np.ndarray:
+        """A column of the output table, e.g. ``run["F_N"]`` (units in ``UNITS``)."""
         return self.table[column]
 
     @property
     def t(self) -> np.ndarray:
+        """The times of the output table, s."""
         return self.table["t"]
 
     def summary(self) -> dict[str, Any]:
+        """First contact time, number of contacts, largest F_N, indentation and abs(F_T) (over
+        the output table and the per-step records), and the integrator, its steps,
+        right-hand-side evaluations and wall time."""
         F_N = self.table["F_N"]
         F_T = self.table["F_T"]
         ind = self.table["indentation"]
@@ -91,6 +96,8 @@ class Trajectory:
         return out
 
     def write_csv(self, path: Path) -> None:
+        """Write the output table as CSV, one column per quantity, units in the header
+        (``t [s],x [m],...``)."""
         names = [c for c in (*COLUMNS, *EXTRA_COLUMNS) if c in self.table]
         names += [c for c in self.table if c not in names]
         header = ",".join(f"{n} [{UNITS.get(n, '-')}]" for n in names)

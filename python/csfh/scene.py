@@ -56,6 +56,19 @@ class SceneError(ValueError):
 
 @dataclass(frozen=True)
 class IntegratorSettings:
+    """The ``[integrator]`` table of a scene.
+
+    * ``rtol``: relative tolerance of CVODE for the event-driven models (model exchange and
+      co-simulation).
+    * ``output_interval``: s, spacing of the rows of the output tables (and the communication
+      step of co-simulation runs).
+    * ``moreau_h``: s, step of the Moreau stepper.
+    * ``stick_rule``: Moreau, ``"paper"`` (f_a decides sticking) or ``"memory"``; None takes the
+      preset's (docs/model.md §6.4).
+    * ``v_eps``: m/s, Moreau applies restitution only for gamma_N < -v_eps (§6.1, §6.3).
+    * ``g_tol``: m, Moreau treats the contact as active when the gap is <= g_tol.
+    """
+
     rtol: float = 1e-6
     output_interval: float = 1e-4
     moreau_h: float = 1e-5
@@ -66,6 +79,19 @@ class IntegratorSettings:
 
 @dataclass(frozen=True)
 class Scene:
+    """A scenario: initial state, stop time, preset, parts, parameter overrides, inputs and
+    integrator settings (the keys of a scene file, see the user guide). Build one with
+    :func:`load_scene` or :func:`scene_from_dict`; it is immutable (:meth:`with_parameters`
+    makes a modified copy).
+
+    * ``q0``, ``u0``: initial x [m], y [m], theta [rad] of G1 relative to O2, and their rates.
+    * ``flexure``, ``friction``: whether those parts of the model are on.
+    * ``parameters``: FMU parameters by name, applied after the preset's.
+    * ``inputs``: constant values of ``F_ext[1]``, ``F_ext[2]``, ``M_ext``.
+    * ``models``: the models of ``csfh compare`` on this scene.
+    * ``cosim``: the raw ``[cosim]`` table (validated by :func:`cosimulate`).
+    """
+
     name: str
     description: str = ""
     preset: str = "paper"
@@ -83,10 +109,12 @@ class Scene:
 
     @property
     def x0(self) -> list[float]:
+        """The six initial states [x, y, theta, vx, vy, omega]."""
         return [*self.q0, *self.u0]
 
     @property
     def stick_rule(self) -> str:
+        """The Moreau stick rule in use: the scene's, else its preset's."""
         return self.integrator.stick_rule or PRESETS[self.preset].stick_rule
 
     def parameter_values(self, law: str | None = None) -> dict[str, float | int | bool]:
@@ -101,7 +129,8 @@ class Scene:
         return {name: model_info.coerce(name, v) for name, v in values.items()}
 
     def with_parameters(self, **overrides: Any) -> Scene:
-        """A copy with more parameter overrides (names with dots: pass a dict via **{...})."""
+        """A copy with more parameter overrides; names with dots go through a dict:
+        ``scene.with_parameters(**{"contact.cr": 0.8})``."""
         return replace(self, parameters={**self.parameters, **overrides})
 
 
@@ -254,10 +283,22 @@ def _check_values(scene: Scene) -> None:
         model.prepare()
     except ParameterError as exc:
         raise SceneError(f"parameters: {exc}") from None
+    # the FMU refuses a start deeper in the bore than contact.max_initial_indentation
+    import numpy as np
+
+    model.state = np.array(scene.x0)
+    depth, limit = -model.get("contact.gap"), model.get("contact.max_initial_indentation")
+    if depth > limit:
+        raise SceneError(
+            f"initial.q = {list(scene.q0)} is {depth:.6g} m deep in the bore (indentation "
+            f"{depth:.6g} m > contact.max_initial_indentation = {limit:g} m)"
+        )
 
 
 def load_scene(scene: str | Path) -> Scene:
-    """A built-in scene by name (central, asymmetric, csfh) or a scene file by path."""
+    """A built-in scene by name (``central``, ``asymmetric``, ``csfh``, ``combdrive``) or a
+    scene file by path. Raises :class:`SceneError` with a one-line message naming the file, the
+    key and the value when the scene cannot be used."""
     path = Path(scene)
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():

@@ -541,7 +541,9 @@ def build_cases(quick: bool = False) -> list[Case]:
         {
             "name": "eccentric",
             "stop_time": 0.5,
-            "initial": {"q": [0.01, 0.01, 0.0]},
+            # O1 = G1 + s1 at [0.01, 0.01], as in the asymmetric scene (G1 at [0.01, 0.01] put
+            # O1 5 mm deep in the bore, which the FMU now refuses)
+            "initial": {"q": [0.0, 0.005, 0.0]},
             "parts": {"flexure": False, "friction": True},
             "parameters": {"body1.s1[1]": 0.01, "body1.s1[2]": 0.005},
         },

@@ -608,6 +608,58 @@ static void test_energy_conservation(void)
     }
 }
 
+/* ---------------------------------------------------------------------------------------- */
+/* issue 14: the start-state check, the peak quantities, the Integer twins of the Enumerations */
+static void test_start_check_peaks_and_numbers(void)
+{
+    csfh_model_t m;
+    char msg[MSG_SIZE] = "";
+    setup_default(&m);
+    CHECK_INT(csfh_model_check_start(&m, msg, sizeof(msg)), 0, "default start accepted");
+    /* q0 = [0.05, 0, 0]: |e| = 0.05, delta = 0.02: 0.03 m deep (PHYSICS.md section 3) */
+    m.x[0] = 0.05;
+    m.x[1] = 0.0;
+    CHECK_INT(csfh_model_check_start(&m, msg, sizeof(msg)), -1, "0.03 m deep refused");
+    CHECK_STR_CONTAINS(msg, "body1.x = 0.05 m, body1.y = 0 m, body1.theta = 0 rad", "names the state");
+    CHECK_STR_CONTAINS(msg, "contact.indentation = 0.03 m", "names the indentation");
+    m.p.max_initial_indentation = 0.031;
+    CHECK_INT(csfh_model_check_start(&m, msg, sizeof(msg)), 0, "accepted under a larger limit");
+    m.p.law = CSFH_CONTACTLAW_NONE;
+    m.p.max_initial_indentation = 1e-3;
+    CHECK_INT(csfh_model_check_start(&m, msg, sizeof(msg)), 0, "no check without a contact law");
+
+    /* peak quantities: zero and unevaluated in flight; F_N, |F_T|, rho in contact */
+    setup_default(&m);
+    double v[CSFH_N_PEAKS] = {1, 1, 1};
+    const double x[6] = {0.0, -0.02 - 5e-5, 0.0, 0.3, -0.1, 0.0};
+    m.z.in_contact = 0;
+    const int contacts = m.counters.contact;
+    CHECK_INT(csfh_model_peak_values(&m, x, v), 0, "flight: nothing to track");
+    CHECK_TRUE(v[0] == 0.0 && v[1] == 0.0 && v[2] == 0.0, "flight: zeros");
+    CHECK_INT(m.counters.contact, contacts, "flight: no contact evaluation");
+    m.z.in_contact = 1;
+    m.z.onset_speed = 0.1;
+    CHECK_INT(csfh_model_peak_values(&m, x, v), 1, "contact: tracked");
+    csfh_contact_eval_t c;
+    csfh_model_contact(&m, x, x + 3, &c);
+    CHECK_ABS(v[0], c.F_N, 0.0, "peak quantity 0 is F_N");
+    CHECK_ABS(v[1], fabs(c.F_T), 0.0, "peak quantity 1 is |F_T|");
+    CHECK_ABS(v[2], 5e-5, 1e-15, "peak quantity 2 is the indentation");
+    CHECK_TRUE(c.F_N > 0.0 && c.F_T != 0.0, "in contact and sliding");
+
+    /* NAME_number, when not 0, sets the Enumeration in prepare */
+    csfh_model_set_defaults(&m);
+    set_by_name(&m, "contact.law_number", CSFH_CONTACTLAW_LN_CYLINDERS);
+    set_by_name(&m, "solver.method_number", CSFH_CVODEMETHOD_ADAMS);
+    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare with the numbers");
+    CHECK_INT(m.p.law, CSFH_CONTACTLAW_LN_CYLINDERS, "contact.law set by its number");
+    CHECK_INT(m.cs_method, CSFH_CVODEMETHOD_ADAMS, "solver.method set by its number");
+    CHECK_ABS(m.d.normal.K, m.d.K_cylinders, 0.0, "the cylinder stiffness is in use");
+    set_by_name(&m, "contact.law_number", 7);
+    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), -1, "law number 7 refused");
+    CHECK_STR_CONTAINS(msg, "contact.law_number", "names the number");
+}
+
 int main(void)
 {
     test_defaults_prepare();
@@ -616,5 +668,6 @@ int main(void)
     test_derivatives();
     test_events();
     test_energy_conservation();
+    test_start_check_peaks_and_numbers();
     return TEST_SUMMARY();
 }

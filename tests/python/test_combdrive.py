@@ -8,6 +8,7 @@ import ctypes
 import math
 import re
 import shutil
+import struct
 import subprocess
 from collections.abc import Callable, Iterator
 from ctypes import POINTER, byref, c_double, c_uint, c_void_p
@@ -313,3 +314,52 @@ def test_fmu_state_round_trip(make_actuator: MakeActuator, cvr: dict[str, int]) 
     t = c_double()
     fmu.fmi2GetRealStatus(fmu.component, 2, byref(t))  # fmi2LastSuccessfulTime
     assert t.value == 0.1
+
+
+@pytest.mark.parametrize(
+    ("name", "good", "bad"),
+    [
+        ("gap", 5.00000012e-6, -1.0),
+        ("direction", 1.50000013, math.nan),
+        ("V", 123.000014, math.inf),
+    ],
+)
+def test_restored_state_is_checked_like_set(
+    make_actuator: MakeActuator, cvr: dict[str, int], name: str, good: float, bad: float
+) -> None:
+    """A state whose bytes say gap = -1 (or a NaN direction, an infinite voltage) is refused by
+    fmi2DeSerializeFMUstate, naming the variable and the value; the instance is unchanged. The
+    variable's bytes are found by its distinctive value."""
+    fmu, log = initialized(make_actuator, cvr, **{name: good})
+    fmu.doStep(0.0, 0.1)
+    state = fmu.getFMUstate()
+    data = bytes(fmu.serializeFMUstate(state))
+    fmu.freeFMUstate(state)
+    packed = struct.pack("<d", good)
+    assert data.count(packed) == 1
+    before = outputs(fmu, cvr)
+    with pytest.raises(FMICallException):
+        fmu.deSerializeFMUstate(data.replace(packed, struct.pack("<d", bad)))
+    assert any(f"{name} = " in m and ("range" in m or "finite" in m) for m in log.errors())
+    assert outputs(fmu, cvr) == before
+    fmu.doStep(0.1, 0.1)  # still usable
+
+
+def test_restored_state_recomputes_the_force_constant(
+    make_actuator: MakeActuator, cvr: dict[str, int]
+) -> None:
+    """force_constant = n eps t / g comes from the restored parameters, not from the bytes."""
+    fmu, log = initialized(make_actuator, cvr, V=200.0)
+    fmu.doStep(0.0, 0.1)
+    k = outputs(fmu, cvr)["force_constant"]
+    state = fmu.getFMUstate()
+    data = bytes(fmu.serializeFMUstate(state))
+    fmu.freeFMUstate(state)
+    forged = data.replace(struct.pack("<d", k), struct.pack("<d", 1e6))
+    assert forged != data
+    restored = fmu.deSerializeFMUstate(forged)
+    fmu.setFMUstate(restored)
+    fmu.freeFMUstate(restored)
+    assert outputs(fmu, cvr)["force_constant"] == k
+    assert outputs(fmu, cvr)["F"] == pytest.approx(k * 200.0**2, rel=1e-15)
+    assert not log.errors()

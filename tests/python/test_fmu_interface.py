@@ -675,11 +675,18 @@ def test_illegal_co_simulation_sequences(make_fmu: MakeFmu, vr: dict[str, int], 
     assert_fmi_error(lambda: fmu.setRealInputDerivatives([vr["F_ext[1]"]], [1], [1.0]))
     fmu.doStep(0.0, 1e-3)  # still usable
     assert fmu.getReal([vr["time"]])[0] == pytest.approx(1e-3)
-    # a communication point that does not match the FMU time fails the step
+    # a communication point that does not match the FMU time is refused: nothing happens
     assert_fmi_error(lambda: fmu.doStep(0.5, 1e-3))
     assert "does not match the FMU time" in log.text()
-    assert_fmi_error(lambda: fmu.doStep(1e-3, 1e-3))  # StepFailed: no further steps
-    assert fmu.getReal([vr["time"]])[0] == pytest.approx(1e-3)  # reading is still allowed
+    assert fmu.getReal([vr["time"]])[0] == pytest.approx(1e-3)
+    fmu.doStep(1e-3, 1e-3)  # still usable
+    # a step that really fails (non-finite derivative) leaves the FMU in StepFailed
+    fmu.setReal([vr["F_ext[2]"]], [1e308])
+    fmu.setReal([vr["F_ext[1]"]], [1e308])
+    assert_fmi_error(lambda: fmu.doStep(2e-3, 1e-3))
+    assert_fmi_error(lambda: fmu.doStep(2e-3, 1e-3))  # StepFailed: no further steps
+    assert "illegal call in state StepFailed" in log.text()
+    assert fmu.getReal([vr["time"]])[0] == pytest.approx(2e-3)  # reading is still allowed
     fmu.terminate()
     assert_fmi_error(lambda: fmu.doStep(1e-3, 1e-3))
     assert_fmi_error(lambda: fmu.setReal([vr["F_ext[1]"]], [1.0]))
@@ -908,10 +915,12 @@ def test_non_finite_derivative_is_an_error(make_fmu: MakeFmu, vr: dict[str, int]
 
 
 def test_non_finite_contact_force_is_an_error(make_fmu: MakeFmu, vr: dict[str, int]) -> None:
-    """A finite but absurd start position: the Hertz force K rho^1.5 overflows."""
+    """A finite but absurd start position: the Hertz force K rho^1.5 overflows. (Such a start is
+    refused unless contact.max_initial_indentation allows it: test_tool_support.py.)"""
     fmu, log = make_fmu("ME")
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
+    fmu.setReal([vr["contact.max_initial_indentation"]], [1e300])
     fmu.setReal([vr["body1.x"]], [1e250])
     fmu.exitInitializationMode()
     assert fmu.getBoolean([vr["contact.active"]]) == [True]

@@ -389,15 +389,22 @@ def test_reset_then_rerun_matches_a_fresh_instance(make_fmu: MakeFmu, vr: dict[s
 
 
 def test_state_of_other_interface_is_rejected(make_fmu: MakeFmu, vr: dict[str, int]) -> None:
-    """A co-simulation state cannot be restored into a model-exchange instance (and back)."""
+    """A co-simulation state cannot be restored into a model-exchange instance (and back): as
+    serialized bytes (the way states move between instances) it is refused by
+    fmi2DeSerializeFMUstate already; the FMUstate pointer of another instance is refused before
+    a byte of it is read."""
     from fmpy.fmi1 import FMICallException
 
     cs, _ = make_fmu("CS")
     setup_scene(cs, vr)
     state = cs.getFMUstate()
+    data = cs.serializeFMUstate(state)
     me, log = make_fmu("ME")
     setup_scene(me, vr)
     with pytest.raises(FMICallException):
-        me.setFMUstate(state)
+        me.deSerializeFMUstate(data)
     assert any("co-simulation instance" in m for m in log.errors())
+    with pytest.raises(FMICallException):
+        me.setFMUstate(state)
+    assert any("not made by this instance" in m for m in log.errors())
     cs.freeFMUstate(state)

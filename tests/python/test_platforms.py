@@ -234,3 +234,80 @@ def test_win64_under_wine_reproduces_linux64(
     assert windows["count"] == linux["count"] and linux["count"][0] >= 1
     for name, w, lin, scale in zip(STATES, windows["read"], linux["read"], NOMINALS, strict=True):
         assert abs(w - lin) <= 1e-9 * max(abs(lin), scale), (name, w, lin)
+
+
+# ------------------------------------------------------------------------------------------
+# the conformance importers (tests/importers/, cross-built for win64 with the FMUs), under wine:
+# each Windows build runs the win64 binary, the Linux build the linux64 one, same arguments.
+# To add an importer: build it with the FMUs (tests/importers/CMakeLists.txt is included by the
+# cross builds too) and add one line here: (name, its options, the events it must log at least).
+WINE_IMPORTERS: list[tuple[str, tuple[str, ...], int]] = [
+    ("me_cvode", ("--mode", "flags", "--rtol", "1e-10", "--interval", "1e-3"), 4),
+    ("me_euler", ("--interval", "1e-3"), 4),
+    ("cs_master", ("--rtol", "1e-8"), 0),  # (it logs no events)
+]
+IMPORTER_OUTPUTS = (*STATES, "contact.gap", "contact.F_N")
+
+
+@pytest.mark.parametrize(
+    ("name", "options", "min_events"), WINE_IMPORTERS, ids=[n for n, _, _ in WINE_IMPORTERS]
+)
+def test_conformance_importers_under_wine_reproduce_linux64(
+    fmu_path: Path,
+    wine_env: dict[str, str],
+    tmp_path: Path,
+    name: str,
+    options: tuple[str, ...],
+    min_events: int,
+) -> None:
+    """`central` to 0.3 s (the drop and two contacts, where the runs are well conditioned, see
+    CASES): the same output rows and events, every output to 1e-9 of its scale."""
+    fmu_dir = Path(fmpy.extract(str(fmu_path), unzipdir=str(tmp_path / "fmu")))
+    linux = BUILD / "importers" / f"csfh_import_{name}"
+    windows = BUILD / "platforms" / "win64" / "importers" / f"csfh_import_{name}.exe"
+    need(linux.is_file() and windows.is_file(), f"{linux} or {windows} not built")
+    binary(fmu_dir, "win64", "csfh")
+    starts = [
+        f"{n}={'true' if v is True else 'false' if v is False else repr(v)}"
+        for n, v in scene_starts(load_scene("central"), "LN_spheres").items()
+    ]
+    tables = {}
+    for platform, command, env in (
+        ("linux64", [str(linux)], None),
+        ("win64", [*wine(), str(windows)], wine_env),
+    ):
+        out, events = tmp_path / f"{platform}.csv", tmp_path / f"{platform}_events.csv"
+        summary = tmp_path / f"{platform}.txt"
+        result = subprocess.run(
+            [
+                *command,
+                str(fmu_dir),
+                "--outputs",
+                ",".join(IMPORTER_OUTPUTS),
+                "--out",
+                str(out),
+                "--events",
+                str(events),
+                "--summary",
+                str(summary),
+                "--stop",
+                "0.3",
+                *options,
+                *starts,
+            ],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=600,
+        )
+        assert result.returncode == 0, (platform, result.stderr, summary.read_text())
+        rows = [line.split(",") for line in out.read_text().splitlines()]
+        tables[platform] = (rows[0], [[float(x) for x in r] for r in rows[1:]])
+        tables[platform + " events"] = events.read_text().count("\n")
+    header, linux_rows = tables["linux64"]
+    assert tables["win64"][0] == header and len(tables["win64"][1]) == len(linux_rows) > 100
+    assert tables["win64 events"] == tables["linux64 events"] >= 1 + min_events  # (+ the header)
+    for j, column in enumerate(header):
+        scale = max(max(abs(r[j]) for r in linux_rows), NOMINALS[j - 1] if 1 <= j <= 6 else 0)
+        worst = max(abs(w[j] - r[j]) for w, r in zip(tables["win64"][1], linux_rows, strict=True))
+        assert worst <= 1e-9 * scale, (column, worst, scale)

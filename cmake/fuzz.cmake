@@ -1,0 +1,65 @@
+# FMI fuzz tests (tests/fuzz/): both FMUs (csfh and the comb-drive actuator) compiled once more,
+# glue + model + core, with AddressSanitizer + UndefinedBehaviorSanitizer (+ LeakSanitizer, part
+# of ASan on Linux), each linked into its own executable with our random FMI call-sequence
+# driver (tests/fuzz/fuzz_fmi.c), and with the FMU-state regression test (tests/fuzz/fmu_states.c).
+# Registered with ctest (label "fuzz"). Included from CMakeLists.txt when CSFH_FUZZ is ON; needs
+# the FMU's prerequisites (CSFH_BUILD_FMU: FMI headers, SUNDIALS).
+#
+#   cmake -S . -B build-fuzz -G Ninja -DCSFH_FUZZ=ON && cmake --build build-fuzz --target csfh_fuzz
+#   ctest --test-dir build-fuzz -L fuzz --output-on-failure
+#   build-fuzz/fuzz_fmi_csfh --seeds 1 100 --sequences 50     # more seeds by hand
+#
+# CVODE is linked through the one variable CSFH_FUZZ_CVODE (a target or library list), so that a
+# different SUNDIALS build is one line away. It is not instrumented: the sanitizers watch our
+# code and every allocation (ASan intercepts malloc), not CVODE's internals.
+if(NOT CSFH_BUILD_FMU)
+  message(FATAL_ERROR "CSFH_FUZZ needs CSFH_BUILD_FMU=ON (FMI headers and SUNDIALS)")
+endif()
+set(CSFH_FUZZ_CVODE csfh_sundials CACHE STRING
+    "CVODE for the fuzz executables (target or libraries)")
+set(CSFH_FUZZ_FLAGS -fsanitize=address,undefined -fno-sanitize-recover=all
+                    -fno-omit-frame-pointer -O1 -g)
+
+enable_testing()
+
+# csfh: the FMI glue, the csfh model adapter and the physics core; the comb-drive actuator: the
+# same glue with its own model and table
+set(_fuzz_sources_csfh ${CSFH_FMI_SOURCES} ${CSFH_CORE_SOURCES})
+set(_fuzz_sources_combdrive
+  fmu_src/fmi/fmi2_glue.c fmu_src/fmi/cosimulation.c
+  fmu_src/combdrive/combdrive_model.c fmu_src/combdrive/combdrive_fmu_model.c
+  fmu_src/core/csfh_vartable.c ${COMBDRIVE_GEN_DIR}/combdrive_variables.c)
+set(_fuzz_gen_csfh ${CSFH_GEN_DIR})
+set(_fuzz_gen_combdrive ${COMBDRIVE_GEN_DIR})
+
+foreach(_fmu csfh combdrive)
+  foreach(_program fuzz_fmi fmu_states)
+    set(_target ${_program}_${_fmu})
+    add_executable(${_target} tests/fuzz/${_program}.c ${_fuzz_sources_${_fmu}})
+    add_dependencies(${_target} csfh_generate)
+    target_include_directories(${_target} PRIVATE ${FMI_HEADERS_DIR} fmu_src/fmi fmu_src/core
+                               fmu_src/combdrive ${_fuzz_gen_${_fmu}})
+    target_compile_options(${_target} PRIVATE ${CSFH_WARNINGS} ${CSFH_FUZZ_FLAGS})
+    # a hopeless step (fuzzed g = 1e20, tolerance 1e-300, a step of 1e300 s) fails at the same
+    # guard as in the FMU, after 20000 CVODE steps instead of 500000: seconds -> 0.1 s
+    target_compile_definitions(${_target} PRIVATE MAX_STEPS_PER_CALL=20000L)
+    target_link_options(${_target} PRIVATE ${CSFH_FUZZ_FLAGS})
+    target_link_libraries(${_target} PRIVATE ${CSFH_FUZZ_CVODE} m)
+  endforeach()
+endforeach()
+
+add_custom_target(csfh_fuzz)
+add_dependencies(csfh_fuzz fuzz_fmi_csfh fuzz_fmi_combdrive fmu_states_csfh fmu_states_combdrive)
+
+# Fixed seeds, bounded: 2 x 320000 calls, about a minute for both FMUs on one core. Hangs are
+# failures (the driver's alarm per sequence, then ctest's timeout).
+set(_fuzz_env "ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1"
+              "UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1")
+add_test(NAME fuzz_fmi_csfh
+         COMMAND fuzz_fmi_csfh --seeds 1 32 --sequences 50 --calls 200 --huge 8)
+add_test(NAME fuzz_fmi_combdrive
+         COMMAND fuzz_fmi_combdrive --seeds 1 32 --sequences 50 --calls 200 --huge 8)
+add_test(NAME fmu_states_csfh COMMAND fmu_states_csfh)
+add_test(NAME fmu_states_combdrive COMMAND fmu_states_combdrive)
+set_tests_properties(fuzz_fmi_csfh fuzz_fmi_combdrive fmu_states_csfh fmu_states_combdrive PROPERTIES
+                     LABELS fuzz TIMEOUT 300 ENVIRONMENT "${_fuzz_env}")
