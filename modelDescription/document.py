@@ -17,7 +17,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from generate import SpecError, load, parse_range
+from generate import SpecError, load, package_version, parse_range
 
 
 def _value(v: dict[str, Any], enums: dict[str, dict[str, Any]]) -> str:
@@ -121,6 +121,7 @@ def main(argv: list[str]) -> int:
     args = ap.parse_args(argv)
     try:
         spec = load(args.variables)
+        spec["model"].setdefault("version", package_version())  # as generate.py
         text = index_html(spec)
     except (SpecError, KeyError, tomllib.TOMLDecodeError) as exc:
         print(f"document.py: {args.variables}: {exc}", file=sys.stderr)
