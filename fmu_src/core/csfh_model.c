@@ -147,6 +147,8 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
     /* Hertz line contact of the pin in the bore (docs/model.md §14.3) */
     d.E_star = csfh_contact_modulus(p->E1, p->nu1, p->E2, p->nu2);
     d.R_conformal = p->R1 * p->R2 / (p->R2 - p->R1);
+    d.shock_dir[0] = cos(p->shock_angle);
+    d.shock_dir[1] = sin(p->shock_angle);
     const double derived[] = {d.delta, d.K_spheres, d.K_cylinders, d.xi, d.esdu_F_max,
                               d.sbar[0], d.sbar[1], d.E_star, d.R_conformal};
     for (size_t i = 0; i < sizeof(derived) / sizeof(derived[0]); i++) {
@@ -159,7 +161,40 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
     return 0;
 }
 
-void csfh_model_smooth_forces(csfh_model_t *m, const double q[3], double Q[3])
+double csfh_half_sine(double A, double T, double t0, double t)
+{
+    /* docs/model.md Eq. (14.9): a half period of a sine of period 2T */
+    if (!(t >= t0 && t <= t0 + T)) {
+        return 0.0;
+    }
+    return A * sin(CSFH_PI * (t - t0) / T);
+}
+
+void csfh_model_frame_acceleration(const csfh_model_t *m, double t, double a[2])
+{
+    a[0] = m->a_base[0];
+    a[1] = m->a_base[1];
+    if (m->p.shock_peak != 0.0) {
+        const double s =
+            csfh_half_sine(m->p.shock_peak, m->p.shock_duration, m->p.shock_start, t);
+        a[0] += s * m->d.shock_dir[0];
+        a[1] += s * m->d.shock_dir[1];
+    }
+}
+
+double csfh_model_next_time_event(const csfh_model_t *m, double t)
+{
+    if (m->p.shock_peak == 0.0) {
+        return INFINITY;
+    }
+    const double t_end = m->p.shock_start + m->p.shock_duration;
+    if (t < m->p.shock_start) {
+        return m->p.shock_start;
+    }
+    return t < t_end ? t_end : INFINITY;
+}
+
+void csfh_model_smooth_forces(csfh_model_t *m, double t, const double q[3], double Q[3])
 {
     /* Q_ext + Q_g, Q_g = [0, -m1 g, 0], and the d'Alembert force -m1 a_base at G1 of the frame's
      * acceleration (docs/model.md Eq. (14.1)); with a_base = 0 the sums are bitwise those
@@ -167,6 +202,14 @@ void csfh_model_smooth_forces(csfh_model_t *m, const double q[3], double Q[3])
     Q[0] = m->u_in[0] - m->p.m1 * m->a_base[0];
     Q[1] = m->u_in[1] - m->p.m1 * m->p.g - m->p.m1 * m->a_base[1];
     Q[2] = m->u_in[2];
+    if (m->p.shock_peak != 0.0) {
+        /* the shock pulse at the integrator's time t (§14.8): one more d'Alembert force; without
+         * a pulse nothing is added, so the sums stay bitwise those of an autonomous model */
+        const double s =
+            csfh_half_sine(m->p.shock_peak, m->p.shock_duration, m->p.shock_start, t);
+        Q[0] -= m->p.m1 * s * m->d.shock_dir[0];
+        Q[1] -= m->p.m1 * s * m->d.shock_dir[1];
+    }
     if (m->p.flexure_enabled) {
         double Qe[3];
         csfh_count(&m->counters.flexure);
@@ -216,11 +259,11 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
     }
 }
 
-int csfh_model_derivatives(csfh_model_t *m, const double x[6], double xdot[6])
+int csfh_model_derivatives(csfh_model_t *m, double t, const double x[6], double xdot[6])
 {
     csfh_count(&m->counters.rhs);
     double Q[3];
-    csfh_model_smooth_forces(m, x, Q);
+    csfh_model_smooth_forces(m, t, x, Q);
     csfh_contact_eval_t c;
     csfh_model_contact(m, x, x + 3, &c);
     if (c.touching) {
@@ -406,5 +449,6 @@ int csfh_model_outputs(csfh_model_t *m)
     /* margins 1 - peak / allowable (§14.4): 1 unloaded, 0 at the allowable, < 0 beyond */
     o->stress_margin = 1.0 - o->stress_max_peak / m->p.stress_allowable;
     o->pressure_margin = 1.0 - o->pressure_max_peak / m->p.pressure_allowable;
+    csfh_model_frame_acceleration(m, m->time, o->a_frame);
     return c.status == CSFH_LAW_ESDU_CLAMPED ? CSFH_WARN_ESDU_CLAMPED : CSFH_OK;
 }

@@ -85,9 +85,10 @@ struct csfh_cvode {
     int next_holdoff;
     double adams_h;         /* auto: mean Adams step of the window before the trial, s */
     double tolerance; /* the relative tolerance the solver was set up with */
-    N_Vector y_root;  /* a root CVODE reported beyond the end of the last communication step: */
-    double t_root;    /* the state there and its time, */
-    int root_pending; /* handled in the communication step that contains it */
+    N_Vector y_root;  /* a root (or time event) CVODE reported beyond the end of the last */
+    double t_root;    /* communication step: the state there and its time, */
+    int root_pending; /* CV_ROOT_RETURN or CV_TSTOP_RETURN, handled in the communication step
+                         that contains it (0: none) */
     long counted_steps; /* CVODE steps already added to the model's counter */
     /* peak outputs (fmu_model.n_peaks > 0, track_peaks) */
     N_Vector peak_y, peak_dy; /* work vectors */
@@ -105,9 +106,9 @@ struct csfh_cvode {
 static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
 {
     fmu_instance_t *inst = (fmu_instance_t *)user_data;
-    (void)t;
-    const int status =
-        fmu_model.derivatives(inst->model, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+    /* the model's time at CVODE's local time t (a time-dependent model: the shock pulse) */
+    const int status = fmu_model.derivatives(inst->model, inst->cvode->origin + t,
+                                             N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
     return status == FMU_MODEL_NONFINITE ? 1 : 0; /* recoverable: CVODE retries a smaller step */
 }
 
@@ -543,6 +544,31 @@ static fmi2Status finish_step(fmu_instance_t *inst, double t_end, fmi2Status sta
     return s > status ? s : status;
 }
 
+/* ------------------------------------------------------------------------------------------ */
+/* time events (fmu_model.next_time_event; csfh: the start and end of the shock pulse, where the
+ * right-hand side has a kink): CVODE is given the next one as its stop time, so that no step
+ * straddles it; it returns CV_TSTOP_RETURN there, and cs_do_step restarts it as at a state
+ * event. Without time events nothing here is called. */
+
+static fmi2Status set_time_event_stop(fmu_instance_t *inst)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    double tn = 0.0;
+    CVodeGetCurrentTime(cv->mem, &tn);
+    double after = cv->origin + tn;
+    for (int i = 0; i < 8; i++) { /* events that round to CVODE's current time are behind it */
+        const double te = fmu_model.next_time_event(inst->model, after);
+        if (!isfinite(te)) {
+            return fmi2OK;
+        }
+        if (te - cv->origin > tn) {
+            return cv_check(inst, CVodeSetStopTime(cv->mem, te - cv->origin), "CVodeSetStopTime");
+        }
+        after = te;
+    }
+    return fmi2OK;
+}
+
 fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
 {
     const double now_abs = *fmu_time(inst);
@@ -581,8 +607,8 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
         if (cv->root_pending && cv->t_root <= t_end) {
             memcpy(N_VGetArrayPointer(cv->y), N_VGetArrayPointer(cv->y_root), NX * sizeof(double));
             tret = cv->t_root;
+            flag = cv->root_pending; /* CV_ROOT_RETURN or CV_TSTOP_RETURN */
             cv->root_pending = 0;
-            flag = CV_ROOT_RETURN;
         } else if (cv->root_pending || tn >= t_end) {
             /* CVODE's last step (and the root check) already reaches past t_end */
             flag = CVodeGetDky(cv->mem, t_end, 0, cv->y);
@@ -591,13 +617,17 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             /* tout only sets the size of the first step after a (re)start (CVODE's estimate is
              * bounded by a tenth of the distance to tout): a fixed horizon, so that the step
              * sequence does not depend on the communication grid */
+            if (fmu_model.next_time_event != NULL && set_time_event_stop(inst) != fmi2OK) {
+                inst->cvode_needs_reinit = 1;
+                return fmi2Error;
+            }
             flag = CVode(cv->mem, tret + FIRST_STEP_HORIZON, cv->y, &tret, CV_ONE_STEP);
             stepped = flag >= 0;
             if (flag >= 0 && tret > t_end) {
-                if (flag == CV_ROOT_RETURN) {
+                if (flag == CV_ROOT_RETURN || flag == CV_TSTOP_RETURN) {
                     memcpy(N_VGetArrayPointer(cv->y_root), N_VGetArrayPointer(cv->y), NX * sizeof(double));
                     cv->t_root = tret;
-                    cv->root_pending = 1;
+                    cv->root_pending = flag;
                 }
                 flag = CVodeGetDky(cv->mem, t_end, 0, cv->y);
                 tret = t_end;
@@ -626,7 +656,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
         }
         track_peaks(inst, tret_before, tret, stepped);
         take_solution(inst, tret);
-        if (flag != CV_ROOT_RETURN && tret >= t_end) {
+        if (flag != CV_ROOT_RETURN && flag != CV_TSTOP_RETURN && tret >= t_end) {
             break;
         }
         if (steps > MAX_STEPS_PER_CALL) {
@@ -652,6 +682,9 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             if (restart) {
                 peaks_forget(cv); /* what follows the event has a new interpolant */
             }
+        } else if (flag == CV_TSTOP_RETURN) {
+            restart = 1; /* a time event: the right-hand side's kink (see set_time_event_stop) */
+            peaks_forget(cv);
         }
         fmi2Status s = fmi2OK;
         if (restart && automatic && cv->method != FMU_CS_ADAMS) {

@@ -169,7 +169,8 @@ static fmi2Status update_derivatives(fmu_instance_t *inst, const char *function)
         return fmi2Error;
     }
     double *x = fmu_states(inst);
-    const int status = fmu_model.derivatives(inst->model, x, fmu_derivatives(inst));
+    const int status =
+        fmu_model.derivatives(inst->model, *fmu_time(inst), x, fmu_derivatives(inst));
     if (status == FMU_MODEL_NONFINITE) {
         char text[MSG_SIZE];
         LOG_ERROR(inst, "%s: non-finite derivative at t = %.17g, state [%s]", function,
@@ -1120,8 +1121,12 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
      * cannot start another event: the event iteration ends (README, "Using the FMU in other
      * tools"). */
     eventInfo->valuesOfContinuousStatesChanged = mode_changed ? fmi2True : fmi2False;
-    eventInfo->nextEventTimeDefined = fmi2False;
-    eventInfo->nextEventTime = 0.0;
+    /* time events (csfh: the ends of the shock pulse): the next one after the current time */
+    const double next = fmu_model.next_time_event != NULL
+                            ? fmu_model.next_time_event(inst->model, *fmu_time(inst))
+                            : INFINITY;
+    eventInfo->nextEventTimeDefined = isfinite(next) ? fmi2True : fmi2False;
+    eventInfo->nextEventTime = isfinite(next) ? next : 0.0;
     return fmi2OK;
 }
 

@@ -160,12 +160,16 @@ def _evaluations(fmu: FMU2Model | FMU2Slave) -> dict[str, int]:
     return dict(zip(parts, (int(v) for v in values), strict=True))
 
 
-def _event_iteration(fmu: FMU2Model) -> None:
+def _event_iteration(fmu: FMU2Model) -> float:
+    """The event iteration; returns the next time event the FMU reports (inf: none)."""
     more = True
+    next_event = math.inf
     while more:
-        more, terminate, *_ = fmu.newDiscreteStates()
+        more, terminate, _, _, defined, next_time = fmu.newDiscreteStates()
         if terminate:
             raise SimulationError("the FMU requested termination")
+        next_event = float(next_time) if defined else math.inf
+    return next_event
 
 
 def simulate_me(
@@ -192,6 +196,7 @@ def simulate_me(
     from fmpy.sundials.cvode import CV_ROOT_RETURN, CVode
 
     CV_ONE_STEP = 2  # cvode.h (fmpy's binding leaves it commented out)
+    CV_TSTOP_RETURN = 1  # cvode.h
 
     rtol = scene.integrator.rtol if rtol is None else rtol
     dt_out = scene.integrator.output_interval if output_interval is None else output_interval
@@ -212,7 +217,7 @@ def simulate_me(
         fmu.enterInitializationMode()
         _apply_start_values(fmu, scene, law, parameters)
         fmu.exitInitializationMode()
-        _event_iteration(fmu)
+        t_event = _event_iteration(fmu)  # time events: the ends of a shock pulse
         fmu.enterContinuousTimeMode()
 
         table = _Table(_TABLE_COLUMNS)
@@ -275,7 +280,7 @@ def simulate_me(
                     peak = max(peak, interpolated(0.5 * (lo + hi), peak_vrs)[j])
                 rec[col] = max(rec[col], peak)
 
-        api["CVodeSetStopTime"](solver.cvode_mem, t_end)
+        api["CVodeSetStopTime"](solver.cvode_mem, min(t_end, t_event))
         t = 0.0
         if output_times is None:
             grid = np.arange(1, math.floor(t_end / dt_out * (1 + 1e-12)) + 1) * dt_out
@@ -320,7 +325,7 @@ def simulate_me(
                 n_events += 1
                 table.add(row)  # the event instant itself (left limit)
                 fmu.enterEventMode()
-                _event_iteration(fmu)
+                t_event = _event_iteration(fmu)
                 fmu.enterContinuousTimeMode()
                 count = fmu.getInteger([count_vr])[0]
                 if count > n_contacts:
@@ -337,7 +342,16 @@ def simulate_me(
                         records[-1][3] = -fmu.getReal([rate_vr])[0]
                 n_steps_total += nst.value  # CVodeReInit restarts the count
                 solver.reset(t)
-                api["CVodeSetStopTime"](solver.cvode_mem, t_end)
+                api["CVodeSetStopTime"](solver.cvode_mem, min(t_end, t_event))
+            elif flag == CV_TSTOP_RETURN and t < t_end * (1 - 1e-15):
+                # a time event (the start or end of a shock pulse, where the right-hand side has
+                # a kink): CVODE stopped exactly there; restart it
+                fmu.enterEventMode()
+                t_event = _event_iteration(fmu)
+                fmu.enterContinuousTimeMode()
+                n_steps_total += nst.value
+                solver.reset(t)
+                api["CVodeSetStopTime"](solver.cvode_mem, min(t_end, t_event))
             if progress is not None:
                 progress.update(t / t_end)
         api["CVodeGetNumSteps"](solver.cvode_mem, byref(nst))
