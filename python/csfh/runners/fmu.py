@@ -48,8 +48,26 @@ OUTPUT_NAMES = {  # table column -> FMU variable
 }
 
 
+CS_OUTPUT_NAMES = {  # co-simulation only: the peaks over each communication step, stresses
+    "F_N_peak": "contact.F_N_peak",
+    "F_T_peak": "contact.F_T_peak",
+    "indentation_peak": "contact.indentation_peak",
+    "stress": "flexure.stress_max",
+    "stress_peak": "flexure.stress_max_peak",
+    "pressure": "contact.pressure_max",
+    "pressure_peak": "contact.pressure_max_peak",
+    "a_frame_x": "a_frame[1]",
+    "a_frame_y": "a_frame[2]",
+}
+"""Extra columns of a co-simulation table: the peaks over the communication step that ends at
+each row (located on CVODE's interpolant; at t = 0 the values there), the flexure stress and its
+peak (tracked inside the step only with flexure.track_stress_peak), the Hertz pressure and its
+peak, and the frame's acceleration (a_base plus the shock pulse)."""
+
+
 @cache
-def _unzipped() -> str:
+def unzipped_fmu() -> str:
+    """The directory of the unzipped csfh.fmu (once per process, removed at exit)."""
     directory = tempfile.mkdtemp(prefix="csfh-fmu-")
     atexit.register(shutil.rmtree, directory, True)
     return extract(str(fmu_path()), unzipdir=directory)
@@ -59,30 +77,48 @@ def _vr(name: str) -> int:
     return model_info.variables()[name].valueReference
 
 
-def _apply_start_values(
-    fmu: FMU2Model | FMU2Slave, scene: Scene, law: str | None, extra: dict[str, Any] | None = None
-) -> None:
+def start_values(
+    scene: Scene, law: str | None, extra: dict[str, Any] | None = None
+) -> list[tuple[str, str, float | int | bool]]:
+    """Every value a run sets in initialization mode, in the order it sets them: (name, FMI type
+    as set: Real | Integer | Boolean, value). The parameters of the scene and law, the overrides,
+    the start state, the inputs. The single runs and the batch master (csfh.runners.cs_batch)
+    both take their values from here."""
     values: dict[str, Any] = dict(scene.parameter_values(law))
     if extra:
         values.update({k: model_info.coerce(k, v) for k, v in extra.items()})
     values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
     values.update(scene.inputs)
     variables = model_info.variables()
+    out: list[tuple[str, str, float | int | bool]] = []
     for name, value in values.items():
         kind = variables[name].type
         if kind == "Real":
-            fmu.setReal([_vr(name)], [float(value)])
+            out.append((name, "Real", float(value)))
         elif kind == "Boolean":
-            fmu.setBoolean([_vr(name)], [bool(value)])
+            out.append((name, "Boolean", bool(value)))
         else:
-            fmu.setInteger([_vr(name)], [int(value)])
+            out.append((name, "Integer", int(value)))
+    return out
+
+
+def _apply_start_values(
+    fmu: FMU2Model | FMU2Slave, scene: Scene, law: str | None, extra: dict[str, Any] | None = None
+) -> None:
+    for name, kind, value in start_values(scene, law, extra):
+        if kind == "Real":
+            fmu.setReal([_vr(name)], [value])
+        elif kind == "Boolean":
+            fmu.setBoolean([_vr(name)], [value])
+        else:
+            fmu.setInteger([_vr(name)], [value])
 
 
 def _instantiate(cls: type, md: ModelDescription, kind: str) -> FMU2Model | FMU2Slave:
     interface = md.modelExchange if kind == "ME" else md.coSimulation
     fmu = cls(
         guid=md.guid,
-        unzipDirectory=_unzipped(),
+        unzipDirectory=unzipped_fmu(),
         modelIdentifier=interface.modelIdentifier,
         instanceName="csfh",
     )
@@ -408,7 +444,7 @@ def simulate_cs(
     h = scene.integrator.output_interval if communication_step is None else communication_step
     t_end = scene.stop_time if stop_time is None else stop_time
     md = model_info.model_description()
-    out_vrs = [_vr(n) for n in OUTPUT_NAMES.values()]
+    out_vrs = [_vr(n) for n in (*OUTPUT_NAMES.values(), *CS_OUTPUT_NAMES.values())]
     count_vr = _vr("contact.count")
     active_vr = _vr("contact.active")
     wall = time.perf_counter()
@@ -418,7 +454,7 @@ def simulate_cs(
         fmu.enterInitializationMode()
         _apply_start_values(fmu, scene, law, parameters)
         fmu.exitInitializationMode()
-        table = _Table(_TABLE_COLUMNS)
+        table = _Table((*_TABLE_COLUMNS, *CS_OUTPUT_NAMES))
         table.add([0.0, *fmu.getReal(out_vrs)])
         n = math.ceil(t_end / h - 1e-9)
         event_vrs = [
@@ -468,6 +504,7 @@ def simulate_cs(
             [_vr("diagnostics.integrator_steps"), _vr("diagnostics.rhs_evaluations")]
         )
         evaluations = _evaluations(fmu)
+        final_count = count
         fmu.terminate()
     finally:
         fmu.freeInstance()
@@ -486,6 +523,7 @@ def simulate_cs(
         "steps": int(steps),
         "rhs_evaluations": int(rhs),
         "evaluations": evaluations,
+        "contact_count": int(final_count),
         "wall_time": time.perf_counter() - wall,
         "do_step_time": do_step_time,
     }
