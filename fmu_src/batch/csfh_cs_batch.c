@@ -10,6 +10,7 @@
 #include "fmi2FunctionTypes.h"
 
 #define ABI_VERSION 1
+#define MAX_OUT 64 /* outputs per run */
 
 /* ------------------------------------------------------------------------------------------ */
 /* the shared-library shim: the only platform-specific code */
@@ -140,31 +141,57 @@ static void reduce(const csfh_cs_batch_spec_t *spec, const double *v, double t, 
     }
 }
 
+/* The outputs grouped by type, so that each step reads them in one call per type. */
+typedef struct {
+    size_t n[3];                       /* per type: how many */
+    fmi2ValueReference vr[3][MAX_OUT]; /* their value references */
+    size_t index[3][MAX_OUT];          /* their places among the outputs */
+} out_groups_t;
+
+static void group_outputs(const csfh_cs_batch_spec_t *spec, out_groups_t *g)
+{
+    memset(g->n, 0, sizeof(g->n));
+    for (size_t j = 0; j < spec->n_out; j++) {
+        const int t = spec->out_type[j] == CSFH_BATCH_INTEGER   ? 1
+                      : spec->out_type[j] == CSFH_BATCH_BOOLEAN ? 2
+                                                                : 0;
+        g->vr[t][g->n[t]] = spec->out_vr[j];
+        g->index[t][g->n[t]++] = j;
+    }
+}
+
 /* Read every output (converted to double). */
-static fmi2Status read_outputs(const api_t *api, fmi2Component c, const csfh_cs_batch_spec_t *spec,
+static fmi2Status read_outputs(const api_t *api, fmi2Component c, const out_groups_t *g,
                                double *v, run_log_t *log)
 {
-    for (size_t j = 0; j < spec->n_out; j++) {
-        const fmi2ValueReference vr = spec->out_vr[j];
-        fmi2Status s;
-        if (spec->out_type[j] == CSFH_BATCH_INTEGER) {
-            fmi2Integer i = 0;
-            s = api->GetInteger(c, &vr, 1, &i);
-            v[j] = (double)i;
-        } else if (spec->out_type[j] == CSFH_BATCH_BOOLEAN) {
-            fmi2Boolean b = fmi2False;
-            s = api->GetBoolean(c, &vr, 1, &b);
-            v[j] = b ? 1.0 : 0.0;
-        } else {
-            s = api->GetReal(c, &vr, 1, &v[j]);
+    double reals[MAX_OUT];
+    fmi2Integer ints[MAX_OUT];
+    fmi2Boolean bools[MAX_OUT];
+    fmi2Status s[3] = {fmi2OK, fmi2OK, fmi2OK};
+    if (g->n[0] > 0) {
+        s[0] = api->GetReal(c, g->vr[0], g->n[0], reals);
+    }
+    if (g->n[1] > 0 && s[0] <= fmi2Warning) {
+        s[1] = api->GetInteger(c, g->vr[1], g->n[1], ints);
+    }
+    if (g->n[2] > 0 && s[0] <= fmi2Warning && s[1] <= fmi2Warning) {
+        s[2] = api->GetBoolean(c, g->vr[2], g->n[2], bools);
+    }
+    for (int t = 0; t < 3; t++) {
+        if (s[t] > fmi2Warning) {
+            call_failed(log, t == 0 ? "fmi2GetReal" : t == 1 ? "fmi2GetInteger" : "fmi2GetBoolean", s[t]);
+            return s[t];
         }
-        if (s > fmi2Warning) {
-            call_failed(log, "fmi2Get*", s);
-            return s;
-        }
-        if (s == fmi2Warning) {
-            log->have_warning = 1;
-        }
+        log->have_warning |= s[t] == fmi2Warning;
+    }
+    for (size_t k = 0; k < g->n[0]; k++) {
+        v[g->index[0][k]] = reals[k];
+    }
+    for (size_t k = 0; k < g->n[1]; k++) {
+        v[g->index[1][k]] = (double)ints[k];
+    }
+    for (size_t k = 0; k < g->n[2]; k++) {
+        v[g->index[2][k]] = bools[k] ? 1.0 : 0.0;
     }
     return fmi2OK;
 }
@@ -179,8 +206,9 @@ long long csfh_cs_batch_points(double stop_time, double step)
 }
 
 /* One run; returns its status. */
-static int run_one(const api_t *api, const csfh_cs_batch_spec_t *spec, const double *values,
-                   long long n_steps, double *result, double *record, run_log_t *log)
+static int run_one(const api_t *api, const csfh_cs_batch_spec_t *spec, const out_groups_t *groups,
+                   const double *values, long long n_steps, double *result, double *record,
+                   run_log_t *log)
 {
     const fmi2CallbackFunctions callbacks = {logger, allocate, free, NULL, log};
     fmi2Component c = api->Instantiate(spec->instance_name, fmi2CoSimulation, spec->guid,
@@ -189,7 +217,7 @@ static int run_one(const api_t *api, const csfh_cs_batch_spec_t *spec, const dou
         call_failed(log, "fmi2Instantiate", fmi2Error);
         return CSFH_BATCH_FAILED;
     }
-    double v[64], max_for_time[64];
+    double v[MAX_OUT], max_for_time[MAX_OUT];
     fmi2Status s = api->SetupExperiment(c, fmi2True, spec->tolerance, 0.0, fmi2True,
                                         spec->stop_time);
     const char *call = "fmi2SetupExperiment";
@@ -222,7 +250,7 @@ static int run_one(const api_t *api, const csfh_cs_batch_spec_t *spec, const dou
         return CSFH_BATCH_FAILED;
     }
     log->have_warning |= s == fmi2Warning;
-    if (read_outputs(api, c, spec, v, log) > fmi2Warning) {
+    if (read_outputs(api, c, groups, v, log) > fmi2Warning) {
         api->FreeInstance(c);
         return CSFH_BATCH_FAILED;
     }
@@ -243,7 +271,7 @@ static int run_one(const api_t *api, const csfh_cs_batch_spec_t *spec, const dou
         }
         log->have_warning |= s == fmi2Warning;
         t = t_next;
-        if (read_outputs(api, c, spec, v, log) > fmi2Warning) {
+        if (read_outputs(api, c, groups, v, log) > fmi2Warning) {
             api->FreeInstance(c);
             return CSFH_BATCH_FAILED;
         }
@@ -272,7 +300,7 @@ long long csfh_cs_batch_run(const csfh_cs_batch_spec_t *spec, size_t n_runs, con
     if (spec == NULL || spec->binary == NULL || spec->guid == NULL ||
         spec->instance_name == NULL || results == NULL || status == NULL ||
         (spec->n_set > 0 && (values == NULL || spec->set_vr == NULL || spec->set_type == NULL)) ||
-        spec->n_out > 64 || (spec->n_out > 0 && (spec->out_vr == NULL || spec->out_type == NULL ||
+        spec->n_out > MAX_OUT || (spec->n_out > 0 && (spec->out_vr == NULL || spec->out_type == NULL ||
                                                  spec->out_reduce == NULL || spec->out_arg == NULL))) {
         snprintf(first, first_size, "csfh_cs_batch_run: bad arguments (NULL, or more than 64 outputs)");
         return -1;
@@ -325,6 +353,8 @@ long long csfh_cs_batch_run(const csfh_cs_batch_spec_t *spec, size_t n_runs, con
         }
         memcpy(symbols[i].slot, &p, sizeof(p)); /* object to function pointer, as dlsym wants */
     }
+    out_groups_t groups;
+    group_outputs(spec, &groups);
     long long failed = 0;
     for (size_t r = 0; r < n_runs; r++) {
         char dummy[1];
@@ -334,7 +364,7 @@ long long csfh_cs_batch_run(const csfh_cs_batch_spec_t *spec, size_t n_runs, con
         double *result = results + r * spec->n_out;
         double *record = records != NULL ? records + r * (size_t)n_points * spec->n_out : NULL;
         const double *v = values != NULL ? values + r * spec->n_set : NULL;
-        status[r] = run_one(&api, spec, v, n_points - 1, result, record, &log);
+        status[r] = run_one(&api, spec, &groups, v, n_points - 1, result, record, &log);
         if (status[r] == CSFH_BATCH_FAILED) {
             for (size_t j = 0; j < spec->n_out; j++) {
                 result[j] = NAN;

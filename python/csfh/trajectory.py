@@ -103,7 +103,10 @@ class Trajectory:
         ):
             if column in self.table and len(self.table[column]):
                 out[key] = max(out[key], float(np.max(self.table[column])))
-        for key, column in (("max_flexure_stress", "stress_peak"), ("max_contact_pressure", "pressure_peak")):
+        for key, column in (
+            ("max_flexure_stress", "stress_peak"),
+            ("max_contact_pressure", "pressure_peak"),
+        ):
             if column in self.table and len(self.table[column]):
                 out[key] = float(np.max(self.table[column]))
         if self.steps:

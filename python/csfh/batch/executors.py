@@ -5,7 +5,6 @@ processes, or a Dask distributed cluster. Each computes the tasks not yet in the
 from __future__ import annotations
 
 import hashlib
-import json
 import math
 import multiprocessing
 import os
@@ -17,7 +16,7 @@ from typing import Any
 
 from ..progress import Progress
 from .store import ResultStore
-from .tasks import Result, Task, run_chunk, scene_fingerprint, worker_init
+from .tasks import Result, Task, batch_group, run_chunk, worker_init
 
 
 def default_workers() -> int:
@@ -28,18 +27,14 @@ def default_workers() -> int:
 
 
 def make_chunks(tasks: Sequence[Task], workers: int, batch: int = 64) -> list[list[Task]]:
-    """Moreau tasks grouped by scene and settings into batches (at most `batch`, and small
-    enough to keep every worker busy); event-driven tasks one per chunk. Deterministic."""
+    """Tasks that run as one batch (Moreau, and co-simulation: `batch_group`) grouped into
+    chunks of at most `batch`, small enough to keep every worker busy; model-exchange tasks one
+    per chunk. Deterministic."""
     groups: dict[tuple[Any, ...], list[Task]] = {}
     chunks: list[list[Task]] = []
     for t in tasks:
-        if t.model == "Moreau":
-            gk = (
-                json.dumps(scene_fingerprint(t.scene), sort_keys=True),
-                t.stop_time,
-                t.output_interval,
-                t.signals,
-            )
+        gk = batch_group(t)
+        if gk is not None:
             groups.setdefault(gk, []).append(t)
         else:
             chunks.append([t])

@@ -12,10 +12,10 @@ from collections.abc import Sequence
 
 from .._version import __version__
 from ..errors import USER_ERRORS
-from . import accuracy, common, cosim, run, sweep
+from . import accuracy, common, cosim, run, shock, sweep
 from .common import CliError
 
-COMMANDS = (run, accuracy, sweep, cosim)
+COMMANDS = (run, accuracy, sweep, shock, cosim)
 """The modules that define the commands: each has register(subparsers)."""
 REPORTED: tuple[type[BaseException], ...] = (CliError, *USER_ERRORS)
 """Errors reported on one line (exit status 2)."""
@@ -33,8 +33,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """The command line: 0 on success, 1 when a command's verdict fails (csfh stress), 2 with
-    one line on standard error for bad input or a failed run, 130 on Ctrl-C."""
+    """The command line: 0 on success, 1 when a command's verdict fails (csfh stress, csfh
+    shock), 2 with one line on standard error for bad input or a failed run, 130 on Ctrl-C."""
     try:
         parser = build_parser()
         args = parser.parse_args(argv)

@@ -76,7 +76,7 @@ TABLE_OUTPUTS: tuple[str, ...] = (
 
 
 class _Spec(Structure):
-    _fields_ = [  # noqa: RUF012 (the ctypes layout of csfh_cs_batch_spec_t)
+    _fields_ = [
         ("binary", c_char_p),
         ("guid", c_char_p),
         ("resource_uri", c_char_p),
@@ -221,7 +221,9 @@ class CsBatchResult:
             records.append([0.0, float(v_on[0]), math.nan, math.nan, math.nan, math.nan])
         for k in range(1, len(count)):
             if count[k] > count[k - 1]:
-                records.append([float(t_on[k]), float(v_on[k]), math.nan, math.nan, math.nan, math.nan])
+                records.append(
+                    [float(t_on[k]), float(v_on[k]), math.nan, math.nan, math.nan, math.nan]
+                )
             if records and not active[k] and (count[k] > count[k - 1] or active[k - 1]):
                 records[-1][2:4] = [float(t_off[k]), float(v_off[k])]
         data = np.array(records, dtype=float).reshape(-1, len(CONTACT_FIELDS))
@@ -292,7 +294,9 @@ def cs_batch(
 
     for out in outs:
         if out[1] not in REDUCTIONS or (out[1] == "first_when") != (len(out) == 3):
-            raise ValueError(f"bad output {out!r}: (name, reduction) or (name, 'first_when', trigger)")
+            raise ValueError(
+                f"bad output {out!r}: (name, reduction) or (name, 'first_when', trigger)"
+            )
     names = [o[0] for o in outs]
     out_vr = [vr_type(n)[0] for n in names]
     out_type = [vr_type(n)[1] for n in names]
