@@ -194,8 +194,8 @@ def time_series(
 
 def clopper_pearson(k: int, n: int, confidence: float = CONFIDENCE) -> tuple[float, float]:
     """The Clopper-Pearson ("exact") two-sided interval of a binomial proportion, k successes in
-    n trials: it covers the true probability with at least `confidence` whatever it is (it is
-    conservative); [0, 1 - (alpha/2)^(1/n)] for k = 0."""
+    n trials (docs/model.md Eq. (14.11)): it covers the true probability with at least
+    `confidence` whatever it is (it is conservative); [0, 1 - (alpha/2)^(1/n)] for k = 0."""
     from scipy.stats import beta
 
     if n < 1 or not 0 <= k <= n:
