@@ -284,7 +284,7 @@ def run_chunk(tasks: Sequence[Task]) -> list[Result]:
         )
     if tasks[0].model == "Moreau":
         return _run_moreau(tasks)
-    if tasks[0].interface == "cs" and batchable(tasks):
+    if tasks[0].interface == "cs" and batchable(tasks) and _batch_master_available():
         return _run_cs_batch(tasks)
     return [_run_fmu(t) for t in tasks]
 
@@ -304,6 +304,19 @@ def batch_group(task: Task) -> tuple[Any, ...] | None:
     if task.interface == "cs":
         return ("cs", task.model, tuple(sorted(k for k, _ in task.parameters)), *base)
     return None
+
+
+@cache
+def _batch_master_available() -> bool:
+    """Whether libcsfh_batch.so is there (a build without it runs co-simulation tasks one by
+    one through fmpy, with the same results)."""
+    from ..paths import batch_library_path
+
+    try:
+        batch_library_path()
+    except FileNotFoundError:
+        return False
+    return True
 
 
 def batchable(tasks: Sequence[Task]) -> bool:

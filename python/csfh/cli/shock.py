@@ -265,6 +265,8 @@ def _run(
         mc_tasks = study.montecarlo_tasks(spec, samples, tol.nominal, worst)
         mc_rep = execute(mc_tasks, f"shock Monte Carlo {spec.scene.name}")
         mc = study.analyse_montecarlo(spec, samples, mc_tasks, store)
+        variables = model_info.variables()
+        units = {k: variables[k].unit or "" for k in tol.tolerances}
         for key in counts:
             counts[key] += getattr(mc_rep, key if key != "tasks" else "total")
         executor = mc_rep.executor
@@ -272,8 +274,9 @@ def _run(
             "source": tol.source,
             "runs": tol.runs,
             "seed": tol.seed,
-            "distributions": {k: d.describe() for k, d in tol.tolerances.items()},
+            "distributions": {k: d.describe(units.get(k, "")) for k, d in tol.tolerances.items()},
             "nominal": tol.nominal,
+            "units": units,
         }
     series = {
         (m, key): study.time_series(

@@ -147,7 +147,7 @@ def plot_montecarlo(
             ax.text(
                 0.98,
                 0.95,
-                f"P(> allowable) = {p['p']:.3g}\n[{p['low']:.2g}, {p['high']:.2g}]",
+                f"P(> allowable) = {p['p']:.3g}\n[{p['low']:.3g}, {p['high']:.3g}]",
                 transform=ax.transAxes,
                 ha="right",
                 va="top",
@@ -160,13 +160,18 @@ def plot_montecarlo(
                 ax.set_ylabel(f"{model} ({r['direction']:g}°)\nruns")
             ax.ticklabel_format(axis="x", useOffset=False)
     fig.suptitle(
-        f"Monte Carlo over tolerances, shock {spec.pulse.describe()} on {spec.scene.name}: "
+        f"Monte Carlo over tolerances, shock {spec.pulse.describe()} on {spec.scene.name}\n"
         f"dashed the nominal, red the allowable (where on scale); {mc['interval']} "
         f"{mc['confidence'] * 100:g} % intervals",
         fontsize=9,
     )
     fig.tight_layout()
     return save(fig, path, dpi=110)
+
+
+def _verdict(r: dict[str, Any]) -> str:
+    n, bad = len(r["directions"]), len(r["failed_directions"])
+    return "pass" if r["passed"] else f"fail in {bad} of {n} direction{'s' if n > 1 else ''}"
 
 
 def _mpa(v: float) -> str:
@@ -207,11 +212,7 @@ def write_markdown(
         f"reused, {run_info['executor']}) in {run_info['wall_time']:.3g} s.",
         "",
         f"**Verdict: {'PASS' if result['passed'] else 'FAIL'}** — "
-        + "; ".join(
-            f"{m}: "
-            + ("pass" if r["passed"] else f"fail in {len(r['failed_directions'])} directions")
-            for m, r in result["models"].items()
-        ),
+        + "; ".join(f"{m}: " + _verdict(r) for m, r in result["models"].items()),
         "",
         "| model | worst direction | peak flexure stress [MPa] (direction) | min flexure margin "
         "| peak contact pressure [MPa] (direction) | min contact margin | verdict |",
@@ -268,7 +269,8 @@ def _montecarlo_markdown(mc: dict[str, Any], run_info: dict[str, Any]) -> list[s
         "|---|---|---|",
     ]
     for key, d in tol["distributions"].items():
-        lines.append(f"| {key} | {tol['nominal'][key]:.6g} | {d} |")
+        unit = tol["units"].get(key, "")
+        lines.append(f"| {key} | {tol['nominal'][key]:.6g} {unit} | {d} |")
     lines += [
         "",
         "| model | direction | flexure stress: nominal / mean / 99 % [MPa] | P(flexure > "
