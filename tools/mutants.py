@@ -109,6 +109,7 @@ class Outcome:
     caught_by: list[str] = field(default_factory=list)
     seconds: float = 0.0
     detail: str = ""
+    failed: list[str] = field(default_factory=list)  # every failing test seen
 
 
 # ------------------------------------------------------------------------------------------
@@ -324,7 +325,9 @@ def expand(argv: Sequence[str], python: str, jobs: int, tests: Sequence[str] = (
             out.extend(tests)
         else:
             out.append(
-                arg.replace("{python}", python).replace("{jobs}", str(jobs)).replace("{regex}", regex)
+                arg.replace("{python}", python)
+                .replace("{jobs}", str(jobs))
+                .replace("{regex}", regex)
             )
     return out
 
@@ -332,8 +335,11 @@ def expand(argv: Sequence[str], python: str, jobs: int, tests: Sequence[str] = (
 FAILED_PATTERNS = (
     re.compile(r"^FAILED (\S+)", re.M),  # pytest -q
     re.compile(r"^ERROR (\S+)", re.M),  # pytest: an error in a fixture or at collection
-    re.compile(r"^\s*\d+ - (\S+) \((?:Failed|SEGFAULT|Subprocess aborted|Timeout|Child aborted|"
-               r"Exception|OTHER_FAULT|Not Run)\)", re.M),  # ctest
+    re.compile(
+        r"^\s*\d+ - (\S+) \((?:Failed|SEGFAULT|Subprocess aborted|Timeout|Child aborted|"
+        r"Exception|OTHER_FAULT|Not Run)\)",
+        re.M,
+    ),  # ctest
 )
 
 
@@ -349,8 +355,9 @@ def failed_tests(output: str) -> list[str]:
 
 
 class Runner:
-    def __init__(self, settings: Settings, work: Path, jobs: int, timeout: float,
-                 log: Any = sys.stdout) -> None:
+    def __init__(
+        self, settings: Settings, work: Path, jobs: int, timeout: float, log: Any = sys.stdout
+    ) -> None:
         self.settings = settings
         self.work = work
         self.jobs = jobs
@@ -369,8 +376,9 @@ class Runner:
     def commands(self, commands: list[list[str]], what: str) -> Result | None:
         """Run set-up or build commands; None on success, else the failing result."""
         for argv in commands:
-            r = run_command(expand(argv, sys.executable, self.jobs), self.work, self.env,
-                            self.timeout)
+            r = run_command(
+                expand(argv, sys.executable, self.jobs), self.work, self.env, self.timeout
+            )
             if r.returncode != 0:
                 return r
         return None
@@ -390,12 +398,15 @@ class Runner:
             r = self.tests(runner, names)
             if r.returncode != 0:
                 ok = False
-                self.say(f"baseline: the {runner} tests fail without any mutant "
-                         f"({', '.join(failed_tests(r.output)) or 'see below'}):")
+                self.say(
+                    f"baseline: the {runner} tests fail without any mutant "
+                    f"({', '.join(failed_tests(r.output)) or 'see below'}):"
+                )
                 self.say(_tail(r.output))
             else:
-                self.say(f"baseline: {len(names)} {runner} test selections pass "
-                         f"({r.seconds:.0f} s)")
+                self.say(
+                    f"baseline: {len(names)} {runner} test selections pass ({r.seconds:.0f} s)"
+                )
         return ok
 
     def mutant(self, m: Mutant) -> Outcome:
@@ -407,9 +418,13 @@ class Runner:
             failed = self.commands(self.settings.build, "build")
             if failed is not None:
                 status = "invalid" if failed.returncode is not None else "timeout"
-                return Outcome(status, seconds=time.monotonic() - start,
-                               detail="the build fails: " + _tail(failed.output, 6))
+                return Outcome(
+                    status,
+                    seconds=time.monotonic() - start,
+                    detail="the build fails: " + _tail(failed.output, 6),
+                )
             caught: list[str] = []
+            failed: list[str] = []
             timed_out = False
             missed: list[str] = []
             for runner, names in m.tests.items():
@@ -419,7 +434,9 @@ class Runner:
                     caught.append(f"{runner} (timeout)")
                 elif r.returncode != 0:
                     which = failed_tests(r.output)
-                    caught.append(f"{runner} ({', '.join(which[:3]) or 'failed'})")
+                    failed += which
+                    more = f" and {len(which) - 3} more" if len(which) > 3 else ""
+                    caught.append(f"{runner} ({', '.join(which[:3]) or 'failed'}{more})")
                 else:
                     missed.append(runner)
                 if caught and not m.each_layer:
@@ -427,8 +444,8 @@ class Runner:
         seconds = time.monotonic() - start
         if missed and (m.each_layer or not caught):
             detail = f"not caught by {', '.join(missed)}"
-            return Outcome("survived", caught, seconds, detail)
-        return Outcome("timeout" if timed_out else "caught", caught, seconds)
+            return Outcome("survived", caught, seconds, detail, failed)
+        return Outcome("timeout" if timed_out else "caught", caught, seconds, failed=failed)
 
 
 def _tail(text: str, lines: int = 25) -> str:
@@ -441,7 +458,7 @@ def report(mutants: Sequence[Mutant], outcomes: dict[str, Outcome]) -> str:
         o = outcomes.get(m.name)
         if o is None:
             continue
-        by = "; ".join(o.caught_by) if o.caught_by else o.detail
+        by = "; ".join([*o.caught_by, *([o.detail] if o.detail else [])])
         rows.append(f"| {m.name} | {m.file} | {o.status} | {by} | {o.seconds:.0f} |")
     counts: dict[str, int] = {}
     for o in outcomes.values():
@@ -460,23 +477,43 @@ def main(argv: Sequence[str] | None = None) -> int:
         description="Apply the mutants of a list one at a time to a copy of the sources, "
         "rebuild, run their tests, report the survivors (see the module docstring).",
     )
-    parser.add_argument("--list-file", type=Path, default=DEFAULT_LIST,
-                        help="the mutant list (default: tools/mutants.toml)")
-    parser.add_argument("--source", type=Path, default=ROOT,
-                        help="the source tree (default: this repository's working tree)")
-    parser.add_argument("--only", nargs="+", metavar="PATTERN",
-                        help="only the mutants whose names match one of these patterns")
+    parser.add_argument(
+        "--list-file",
+        type=Path,
+        default=DEFAULT_LIST,
+        help="the mutant list (default: tools/mutants.toml)",
+    )
+    parser.add_argument(
+        "--source",
+        type=Path,
+        default=ROOT,
+        help="the source tree (default: this repository's working tree)",
+    )
+    parser.add_argument(
+        "--only",
+        nargs="+",
+        metavar="PATTERN",
+        help="only the mutants whose names match one of these patterns",
+    )
     parser.add_argument("--list", action="store_true", help="print the mutants and exit")
-    parser.add_argument("--check", action="store_true",
-                        help="check that every mutant applies to the sources, and exit")
-    parser.add_argument("--workdir", type=Path,
-                        help="keep the copy and its build here (reused by the next run)")
+    parser.add_argument(
+        "--check",
+        action="store_true",
+        help="check that every mutant applies to the sources, and exit",
+    )
+    parser.add_argument(
+        "--workdir", type=Path, help="keep the copy and its build here (reused by the next run)"
+    )
     parser.add_argument("--keep", action="store_true", help="keep the scratch copy")
-    parser.add_argument("--no-baseline", action="store_true",
-                        help="skip running the chosen tests on the unmodified copy first")
+    parser.add_argument(
+        "--no-baseline",
+        action="store_true",
+        help="skip running the chosen tests on the unmodified copy first",
+    )
     parser.add_argument("--jobs", type=int, default=2, help="build parallelism (default 2)")
-    parser.add_argument("--timeout", type=float,
-                        help="s per command (default: the list's, else 1800)")
+    parser.add_argument(
+        "--timeout", type=float, help="s per command (default: the list's, else 1800)"
+    )
     parser.add_argument("--json", type=Path, help="also write the outcomes as JSON here")
     args = parser.parse_args(argv)
 
@@ -504,8 +541,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{len(mutants) - len(bad)} of {len(mutants)} mutants apply to {src}")
         return 1 if bad else 0
 
-    old_handlers = {s: signal.signal(s, _raise_interrupted) for s in (signal.SIGINT, signal.SIGTERM)}
-    work = args.workdir.resolve() if args.workdir else Path(tempfile.mkdtemp(prefix="csfh-mutants-"))
+    old_handlers = {
+        s: signal.signal(s, _raise_interrupted) for s in (signal.SIGINT, signal.SIGTERM)
+    }
+    work = (
+        args.workdir.resolve() if args.workdir else Path(tempfile.mkdtemp(prefix="csfh-mutants-"))
+    )
     remove = args.workdir is None and not args.keep
     outcomes: dict[str, Outcome] = {}
     status = 0
@@ -514,7 +555,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         runner = Runner(settings, work, args.jobs, args.timeout or settings.timeout)
         n = sync_copy(src, work)
         runner.say(f"copy of {src} in {work} ({n} files written)")
-        failed = runner.commands(settings.setup, "setup") or runner.commands(settings.build, "build")
+        failed = runner.commands(settings.setup, "setup") or runner.commands(
+            settings.build, "build"
+        )
         if failed is not None:
             runner.say("the unmodified copy does not set up or build:\n" + _tail(failed.output))
             return 2
@@ -523,15 +566,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         for i, m in enumerate(mutants, 1):
             o = runner.mutant(m)
             outcomes[m.name] = o
-            by = "; ".join(o.caught_by) if o.caught_by else o.detail
+            by = "; ".join([*o.caught_by, *([o.detail] if o.detail else [])])
             runner.say(f"[{i}/{len(mutants)}] {m.name}: {o.status} {by} ({o.seconds:.0f} s)")
         print()
         print(report(mutants, outcomes))
         bad = [name for name, o in outcomes.items() if o.status in ("survived", "invalid", "stale")]
         status = 1 if bad else 0
     except Interrupted as exc:
-        print(f"\ntools/mutants.py: interrupted ({exc}); the sources were never touched",
-              file=sys.stderr)
+        print(
+            f"\ntools/mutants.py: interrupted ({exc}); the sources were never touched",
+            file=sys.stderr,
+        )
         if outcomes:
             print(report(mutants, outcomes), file=sys.stderr)
         status = 130

@@ -165,15 +165,23 @@ def sigma(E: float, nu: float) -> float:
     return (1.0 - nu * nu) / E
 
 
-def k_spheres(E1: float = 210e9, E2: float = 210e9, nu1: float = 0.3, nu2: float = 0.3,
-              R1: float = 0.18, R2: float = 0.20, internal: bool = False) -> float:
+def k_spheres(
+    E1: float = 210e9,
+    E2: float = 210e9,
+    nu1: float = 0.3,
+    nu2: float = 0.3,
+    R1: float = 0.18,
+    R2: float = 0.20,
+    internal: bool = False,
+) -> float:
     """Hertz sphere stiffness 4 sqrt(R_eff) / (3 (sigma1 + sigma2)), N/m^1.5 (4.3)."""
     reff = R1 * R2 / (R2 - R1) if internal else R1 * R2 / (R1 + R2)
     return 4.0 * math.sqrt(reff) / (3.0 * (sigma(E1, nu1) + sigma(E2, nu2)))
 
 
-def k_cylinders(E1: float = 210e9, E2: float = 210e9, nu1: float = 0.3, nu2: float = 0.3,
-                L: float = 0.025) -> float:
+def k_cylinders(
+    E1: float = 210e9, E2: float = 210e9, nu1: float = 0.3, nu2: float = 0.3, L: float = 0.025
+) -> float:
     """(pi/4) E* L, N/m (4.4)."""
     return math.pi / 4.0 / (sigma(E1, nu1) + sigma(E2, nu2)) * L
 

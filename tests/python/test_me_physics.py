@@ -119,9 +119,7 @@ def test_first_central_impact_every_law(law: str, reading: str) -> None:
     expected = oracles.central_impact(
         _elastic_part(law, reading), oracles.xi(law, 0.9), v_in=float(v_on)
     )
-    assert rec["t_release"][0] - rec["t_onset"][0] == pytest.approx(
-        expected["duration"], rel=1e-6
-    )
+    assert rec["t_release"][0] - rec["t_onset"][0] == pytest.approx(expected["duration"], rel=1e-6)
     assert rec["max_indentation"][0] == pytest.approx(expected["rho_max"], rel=1e-6)
     assert rec["release_speed"][0] == pytest.approx(expected["exit_speed"], rel=1e-6)
 
@@ -258,8 +256,9 @@ def test_ambrosio_friction_force_at_a_state(make_fmu: Any, vr: dict[str, int]) -
         F_T = fmu.getReal([vr["contact.F_T"]])[0]
         assert fmu.getReal([vr["contact.v_T"]])[0] == pytest.approx(v_T, rel=1e-12, abs=1e-18)
         assert fmu.getReal([vr["contact.F_N"]])[0] == pytest.approx(F_N, rel=1e-12)
-        assert F_T == pytest.approx(-fd * c_d * F_N * math.copysign(1.0, v_T), rel=1e-12,
-                                    abs=1e-12), (vx, omega, v_T)
+        assert F_T == pytest.approx(
+            -fd * c_d * F_N * math.copysign(1.0, v_T), rel=1e-12, abs=1e-12
+        ), (vx, omega, v_T)
 
 
 # ------------------------------------------------------------------------------------------

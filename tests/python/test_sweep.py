@@ -326,14 +326,18 @@ def test_tolerance_study_is_reproducible(tmp_path: Path) -> None:
     expected = []
     for k in range(6):
         flexure = oracles.Flexure(
-            h=samples["flexure.h"][k], rho=samples["flexure.rho"][k], beta=samples["flexure.beta"][k]
+            h=samples["flexure.h"][k],
+            rho=samples["flexure.rho"][k],
+            beta=samples["flexure.beta"][k],
         )
         delta = samples["contact.R2"][k] - samples["contact.R1"][k]
         expected.append(oracles.first_contact_of_flight(flexure, delta=delta)[0])
     assert np.ptp(expected) > 5e-5  # the tolerances move it far beyond the tolerance below
     np.testing.assert_allclose(fc, expected, rtol=0, atol=4e-7)
     h = load_study("tolerance_csfh").scene.integrator.moreau_h
-    assert all(t_c - h / 2 - 1e-12 <= t < t_c + h / 2 for t, t_c in zip(fc_moreau, expected, strict=True))
+    assert all(
+        t_c - h / 2 - 1e-12 <= t < t_c + h / 2 for t, t_c in zip(fc_moreau, expected, strict=True)
+    )
     for name in ("tolerance.md", "tolerance_histograms.png"):
         assert (tmp_path / "a" / name).stat().st_size > 0
 
