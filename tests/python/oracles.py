@@ -125,10 +125,10 @@ def first_contact_of_flight(
     g: float = G,
     rtol: float = 1e-12,
 ) -> tuple[float, np.ndarray]:
-    """Time and state [x, y, theta, vx, vy, omega] of the first contact (gap delta - |r| = 0,
-    s1-bar = 0, PHYSICS.md 3.1) of body 1 released at rest from q0, under gravity and the
-    flexure (None: free fall); DOP853 with event location at rtol (position error ~ rtol x
-    0.01 m, time error ~ that / the approach speed ~ 1e-14 s at 1e-12)."""
+    """Time and state [x, y, theta, vx, vy, omega] of the first contact (the gap (3.1) of
+    PHYSICS.md 3 with s1-bar = 0: delta - |r| = 0) of body 1 released at rest from q0, under
+    gravity and the flexure (None: free fall); DOP853 with event location at rtol (position
+    error ~ rtol x 0.01 m, time error ~ that / the approach speed ~ 1e-14 s at 1e-12)."""
     K0 = flexure.stiffness() if flexure is not None else None
 
     def rhs(_t: float, x: np.ndarray) -> np.ndarray:
