@@ -41,10 +41,11 @@ The list (TOML):
     each_layer = true
     tests = { C = ["test_moreau"], Python = ["tests/python/test_harness.py::test_x"] }
 
-In commands: {python} is this interpreter, {jobs} the build parallelism (--jobs), {tests} the
-mutant's tests for that runner (one argument each), {regex} them as one anchored alternation
-^(a|b)$ (for ctest -R). Commands run in the copy with PYTHONPATH=<copy>/python, and without the
-CSFH_FMU/CSFH_CORE/CSFH_COMBDRIVE_FMU overrides, so the tests use the copy's build.
+In commands: {python} is this interpreter, {jobs} the build parallelism (--jobs), {source} the
+source tree (e.g. for a download cache kept there), {tests} the mutant's tests for that runner
+(one argument each), {regex} them as one anchored alternation ^(a|b)$ (for ctest -R).
+Commands run in the copy with PYTHONPATH=<copy>/python, and without the CSFH_FMU/CSFH_CORE/
+CSFH_COMBDRIVE_FMU overrides, so the tests use the copy's build.
 
 Exit status: 0 every mutant caught, 1 some survived (or invalid, stale), 2 bad list, failed
 baseline or set-up, 130 interrupted.
@@ -317,18 +318,23 @@ def _kill_group(proc: subprocess.Popen[bytes]) -> None:
         pass
 
 
-def expand(argv: Sequence[str], python: str, jobs: int, tests: Sequence[str] = ()) -> list[str]:
+def expand(
+    argv: Sequence[str], python: str, jobs: int, source: Path, tests: Sequence[str] = ()
+) -> list[str]:
     regex = "^(" + "|".join(re.escape(t) for t in tests) + ")$"
     out: list[str] = []
     for arg in argv:
         if arg == "{tests}":
             out.extend(tests)
-        else:
-            out.append(
-                arg.replace("{python}", python)
-                .replace("{jobs}", str(jobs))
-                .replace("{regex}", regex)
-            )
+            continue
+        for key, value in (
+            ("{python}", python),
+            ("{jobs}", str(jobs)),
+            ("{regex}", regex),
+            ("{source}", str(source)),
+        ):
+            arg = arg.replace(key, value)
+        out.append(arg)
     return out
 
 
@@ -356,9 +362,16 @@ def failed_tests(output: str) -> list[str]:
 
 class Runner:
     def __init__(
-        self, settings: Settings, work: Path, jobs: int, timeout: float, log: Any = sys.stdout
+        self,
+        settings: Settings,
+        source: Path,
+        work: Path,
+        jobs: int,
+        timeout: float,
+        log: Any = sys.stdout,
     ) -> None:
         self.settings = settings
+        self.source = source
         self.work = work
         self.jobs = jobs
         self.timeout = timeout
@@ -377,14 +390,17 @@ class Runner:
         """Run set-up or build commands; None on success, else the failing result."""
         for argv in commands:
             r = run_command(
-                expand(argv, sys.executable, self.jobs), self.work, self.env, self.timeout
+                expand(argv, sys.executable, self.jobs, self.source),
+                self.work,
+                self.env,
+                self.timeout,
             )
             if r.returncode != 0:
                 return r
         return None
 
     def tests(self, runner: str, tests: Sequence[str]) -> Result:
-        argv = expand(self.settings.runners[runner], sys.executable, self.jobs, tests)
+        argv = expand(self.settings.runners[runner], sys.executable, self.jobs, self.source, tests)
         return run_command(argv, self.work, self.env, self.timeout)
 
     def baseline(self, mutants: Sequence[Mutant]) -> bool:
@@ -552,7 +568,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     status = 0
     try:
         work.mkdir(parents=True, exist_ok=True)
-        runner = Runner(settings, work, args.jobs, args.timeout or settings.timeout)
+        runner = Runner(settings, src, work, args.jobs, args.timeout or settings.timeout)
         n = sync_copy(src, work)
         runner.say(f"copy of {src} in {work} ({n} files written)")
         failed = runner.commands(settings.setup, "setup") or runner.commands(
