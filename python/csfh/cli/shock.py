@@ -60,8 +60,8 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--directions",
         metavar="N",
-        default=str(DEFAULT_DIRECTIONS),
-        help="number of directions evenly over 360 degrees",
+        help="number of directions evenly over 360 degrees, from 0 (default: "
+        f"{DEFAULT_DIRECTIONS})",
     )
     p.add_argument(
         "--models",
@@ -168,6 +168,8 @@ def cmd_shock(args: argparse.Namespace) -> int:
         raise CliError("give either --condition or --peak and --duration, not both")
     if (peak is None) != (duration is None):
         raise CliError("--peak and --duration go together")
+    if direction is not None and n_dirs is not None:
+        raise CliError("give either --direction or --directions, not both")
     if args.tolerance is None and (runs is not None or seed is not None):
         raise CliError("--runs and --seed need --tolerance FILE")
     try:
@@ -212,7 +214,9 @@ def _run(
     spec = study.ShockSpec(
         scene=scene,
         pulse=pulse,
-        directions=(direction % 360.0,) if direction is not None else study.directions(n_dirs or 1),
+        directions=(direction % 360.0,)
+        if direction is not None
+        else study.directions(n_dirs or DEFAULT_DIRECTIONS),
         models=models,
         start=start,
         stop_time=stop_time,
