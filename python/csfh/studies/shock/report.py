@@ -174,6 +174,11 @@ def _verdict(r: dict[str, Any]) -> str:
     return "pass" if r["passed"] else f"fail in {bad} of {n} direction{'s' if n > 1 else ''}"
 
 
+def _margin(m: float) -> str:
+    """A margin to three decimals, or two significant digits where that would read 0."""
+    return f"{m:+.1e}" if 0 < abs(m) < 5e-4 else f"{m:+.3f}"
+
+
 def _mpa(v: float) -> str:
     return f"{v * MPA:.4g}"
 
@@ -200,7 +205,8 @@ def write_markdown(
         f"({', '.join(f'{d:g}' for d in spec.directions)} degrees from the global X axis, "
         "counter-clockwise; 90 = upward, as when a falling device hits the floor).",
         f"* Start: the scene's configuration q0 = {list(spec.scene.q0)} at rest relative to the "
-        f"frame; horizon {spec.stop_time:g} s.",
+        "frame (the scene's start, not necessarily its static equilibrium: a body that is not "
+        f"held there moves under gravity as well); horizon {spec.stop_time:g} s.",
         f"* Models: {', '.join(spec.models)}; co-simulation, CVODE inside the FMU, rtol "
         f"{spec.rtol:g}, communication step {spec.step:g} s; the pulse is evaluated in the "
         "right-hand side and CVODE stops at its start and end (docs/model.md §14.8); the peaks are "
@@ -221,9 +227,9 @@ def write_markdown(
     for m, r in result["models"].items():
         lines.append(
             f"| {m} | {r['worst_direction']:g}° | {_mpa(r['max_flexure_stress'])} "
-            f"({r['worst_flexure_stress_direction']:g}°) | {r['min_flexure_margin']:+.3f} | "
+            f"({r['worst_flexure_stress_direction']:g}°) | {_margin(r['min_flexure_margin'])} | "
             f"{_mpa(r['max_contact_pressure'])} ({r['worst_contact_pressure_direction']:g}°) | "
-            f"{r['min_contact_margin']:+.3f} | {'pass' if r['passed'] else '**FAIL**'} |"
+            f"{_margin(r['min_contact_margin'])} | {'pass' if r['passed'] else '**FAIL**'} |"
         )
     lines.append("")
     for fig in figures:
@@ -243,8 +249,8 @@ def write_markdown(
             first = row["first_contact"]
             lines.append(
                 f"| {row['direction']:g}° | {_mpa(row['flexure_stress'])} | "
-                f"{row['flexure_margin']:+.3f} | {_mpa(row['contact_pressure'])} | "
-                f"{row['contact_margin']:+.3f} | {row['contacts']} | "
+                f"{_margin(row['flexure_margin'])} | {_mpa(row['contact_pressure'])} | "
+                f"{_margin(row['contact_margin'])} | {row['contacts']} | "
                 f"{'—' if first is None else f'{first * 1e3:.4g}'} | "
                 f"{'pass' if row['passed'] else '**FAIL**'} |"
             )
