@@ -87,6 +87,26 @@ def test_pulse_changes_the_velocity_by_its_integral(interface: str) -> None:
     assert tr["theta"][-1] == 0.0 and tr["omega"][-1] == 0.0
 
 
+def test_moreau_and_rk4_see_the_pulse_at_their_own_times() -> None:
+    """The Moreau stepper evaluates the pulse at each step's midpoint (the midpoint rule: error
+    (pi h / T)^2 / 24 of the velocity change) and the RK4 baseline at its stage times (in free
+    flight, Simpson's rule on each step: error pi (pi h / T)^4 / 360 at most)."""
+    from csfh.runners.moreau import moreau
+    from csfh.runners.rk4 import rk4_event
+
+    scene = load_scene("central")
+    v, _ = free_flight_exact(2e-3)
+    h = 1e-6
+    rigid = moreau(scene, h=h, stop_time=2e-3, parameters={**FREE, **PULSE})
+    midpoint_error = (math.pi * h / T_PULSE) ** 2 / 24
+    assert rigid["vx"][-1] == pytest.approx(v * math.cos(ANGLE), rel=3 * midpoint_error)
+    assert abs(rigid["vx"][-1] / (v * math.cos(ANGLE)) - 1) > midpoint_error / 3
+    h = T_PULSE / 50
+    rk4 = rk4_event(scene, "LN_spheres", h0=h, stop_time=2e-3, parameters={**FREE, **PULSE})
+    simpson_error = math.pi * (math.pi * h / T_PULSE) ** 4 / 360  # 1.4e-7
+    assert rk4["vy"][-1] == pytest.approx(v * math.sin(ANGLE), rel=simpson_error)
+
+
 def test_pulse_held_over_communication_steps_is_not_accurate() -> None:
     """The same pulse given through the a_base input, held over each communication step (the
     value at the step's start, as a master would hold it): the velocity change misses by the
