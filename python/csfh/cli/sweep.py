@@ -165,6 +165,22 @@ def _run(tasks: list[Any], out: Path, args: argparse.Namespace, label: str) -> A
     return store, report
 
 
+def _check_horizon(scene: Any, stop_time: float, option: bool) -> None:
+    """The scene's limits (csfh.model.scene) on a horizon that --stop-time may have changed."""
+    from ..errors import SceneError
+    from ..model.scene import check_horizon
+
+    try:
+        check_horizon(
+            stop_time,
+            scene.integrator.output_interval,
+            scene.integrator.moreau_h,
+            stop_key="--stop-time" if option else "stop_time",
+        )
+    except SceneError as exc:
+        raise SceneError(f"{scene.source or scene.name}: {exc}") from None
+
+
 def _run_time_sum(tasks: list[Any], store: Any) -> float:
     """Wall time of the runs themselves, summed over the tasks (whenever they were computed)."""
     keys = {t.key for t in tasks}
@@ -204,6 +220,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             else tuple(p.key for p in parameters.PARAMETERS)
         )
     stop_time = args.stop_time or (0.2 if args.quick else scene.stop_time)
+    _check_horizon(scene, stop_time, args.stop_time is not None)
     dt = scene.integrator.output_interval
     if stop_time / dt < 10:
         raise CliError(f"horizon {stop_time:g} s is shorter than 10 output intervals ({dt:g} s)")
@@ -284,6 +301,7 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         models=_check_models(args.models, study.models),
     )
     stop_time = args.stop_time or study.scene.stop_time
+    _check_horizon(study.scene, stop_time, args.stop_time is not None)
     samples = [tolerance.sample(study, k) for k in range(study.runs)]
     tolerance.check_samples(study, samples)
     notes = _notes(args)
