@@ -197,11 +197,14 @@ def test_interrupted_sweep_keeps_its_results_and_resumes(tmp_path: Path) -> None
     with pytest.raises(KeyboardInterrupt):
         run_tasks(tasks, store, workers=1, quiet=True, batch=1, on_result=interrupt)
     assert len(ResultStore(tmp_path)) == 2
-    # a torn last line (killed while writing) is dropped, the file stays line-aligned
+    # a torn last line (killed while writing) is set aside, reported, and the file stays
+    # line-aligned
     with open(tmp_path / "tasks.jsonl", "a", encoding="utf-8") as fh:
         fh.write('{"key": "abc", "summ')
     store = ResultStore(tmp_path)
     assert len(store) == 2
+    assert len(store.problems) == 1 and "line 3: incomplete" in store.problems[0]
+    assert (tmp_path / "tasks.rejected.jsonl").read_text() == '{"key": "abc", "summ\n'
     assert (tmp_path / "tasks.jsonl").read_bytes().endswith(b"\n")
     report = run_tasks(tasks, store, workers=1, quiet=True)
     assert (report.reused, report.computed, report.total) == (2, 4, 6)

@@ -144,6 +144,14 @@ def _run(tasks: list[Any], out: Path, args: argparse.Namespace, label: str) -> A
     from ..batch.store import ResultStore
 
     store = ResultStore(out)
+    for problem in store.problems[:10]:
+        print(f"csfh: warning: {problem}", file=sys.stderr)
+    if len(store.problems) > 10:
+        print(
+            f"csfh: warning: {len(store.problems) - 10} more records skipped "
+            f"(all of them are in {out / 'tasks.rejected.jsonl'})",
+            file=sys.stderr,
+        )
     try:
         report = run_tasks(
             tasks,
@@ -199,6 +207,7 @@ def _notes(args: argparse.Namespace) -> str | None:
 def cmd_sweep(args: argparse.Namespace) -> int:
     from ..model import model_info
     from ..model.scene import load_scene
+    from ..output import output_set
     from ..studies.sweep import analysis, parameters, spec
     from ..studies.sweep.figures import plot_departure, plot_examples, plot_levels
     from ..studies.sweep.report import write_json_report, write_markdown
@@ -260,17 +269,18 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         "run_time_sum": _run_time_sum(tasks, store),
         "notes": notes,
     }
-    figures = [
-        plot_levels(out / "sweep_levels.png", result),
-        plot_departure(out / "sweep_departure.png", result),
-    ]
-    example = plot_examples(out / "sweep_examples.png", sweep_spec, tasks, store, result)
-    if example is not None:
-        figures.append(example)
-    write_json_report(
-        out / "sweep.json", result, {k: v for k, v in run_info.items() if k != "notes"}
-    )
-    write_markdown(out / "sweep.md", result, run_info, figures)
+    with output_set(out, "sweep"):  # the report replaces the previous one as a whole
+        figures = [
+            plot_levels(out / "sweep_levels.png", result),
+            plot_departure(out / "sweep_departure.png", result),
+        ]
+        example = plot_examples(out / "sweep_examples.png", sweep_spec, tasks, store, result)
+        if example is not None:
+            figures.append(example)
+        write_json_report(
+            out / "sweep.json", result, {k: v for k, v in run_info.items() if k != "notes"}
+        )
+        write_markdown(out / "sweep.md", result, run_info, figures)
     if not args.quiet:
         for group, c in result["comparison"].items():
             print(
@@ -288,6 +298,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 def cmd_tolerance(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
+    from ..output import output_set
     from ..studies.tolerance import study as tolerance
     from ..studies.tolerance.report import plot_histograms, write_json_report, write_markdown
 
@@ -329,9 +340,10 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         "wall_time": time.perf_counter() - wall,
         "run_time_sum": _run_time_sum(tasks, store),
     }
-    fig = plot_histograms(out / "tolerance_histograms.png", study, result)
-    write_json_report(out / "tolerance.json", study, result, run_info)
-    write_markdown(out / "tolerance.md", study, result, {**run_info, "notes": notes}, fig)
+    with output_set(out, "tolerance"):  # the report replaces the previous one as a whole
+        fig = plot_histograms(out / "tolerance_histograms.png", study, result)
+        write_json_report(out / "tolerance.json", study, result, run_info)
+        write_markdown(out / "tolerance.md", study, result, {**run_info, "notes": notes}, fig)
     if not args.quiet:
         for model, r in result["models"].items():
             st = r["stats"]
