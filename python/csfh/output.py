@@ -96,11 +96,6 @@ def _write_bytes(path: Path, data: bytes) -> Path:
     return path
 
 
-def write_bytes(path: Path, data: bytes) -> Path:
-    """Bytes to a file (through the open output set that holds it, if any)."""
-    return _write_bytes(path, data)
-
-
 # ------------------------------------------------------------------------------------------
 # output sets
 
@@ -297,16 +292,19 @@ def output_set(directory: Path, name: str, *, merge: bool = False) -> Iterator[O
 
 
 def read_manifest(directory: Path, name: str) -> dict[str, Any] | None:
-    """The manifest of output set `name` in `directory` (None if there is none)."""
+    """The manifest of output set `name` in `directory`; None if there is none or it cannot be
+    read (the set is then treated as one written before manifests existed: nothing of it is
+    removed or checked)."""
     path = Path(directory) / STATE_DIR / f"{name}.json"
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
+    except (OSError, ValueError):
         return None
-    except ValueError:
-        raise ValueError(f"{path}: damaged manifest (not JSON)") from None
     if not isinstance(data, dict) or not isinstance(data.get("files"), dict):
-        raise ValueError(f"{path}: damaged manifest (no files)")
+        return None
+    files = data["files"]
+    if not all(isinstance(v, dict) and isinstance(v.get("sha256"), str) for v in files.values()):
+        return None
     return data
 
 
