@@ -63,8 +63,10 @@ def run_c_master(
     read: tuple[str, ...] = STATE_NAMES,
     count: tuple[str, ...] = ("contact.count",),
     extra: dict[str, Any] | None = None,
+    binary: Path | None = None,
 ) -> MasterRun:
-    """Run `scene` with `law` in the compiled master; the loop's median wall time and results."""
+    """Run `scene` with `law` in the compiled master; the loop's median wall time and results.
+    `binary`: the FMU binary to load (default: binaries/linux64/csfh.so of the FMU in use)."""
     variables = model_info.variables()
     starts = []
     for name, value in start_values(scene, law, extra).items():
@@ -73,7 +75,7 @@ def run_c_master(
     out = subprocess.run(
         [
             str(master),
-            _binary(),
+            str(binary) if binary is not None else _binary(),
             model_info.model_description().guid,
             repr(rtol),
             repr(communication_step),

@@ -15,7 +15,7 @@
 if(NOT CSFH_BUILD_FMU)
   message(FATAL_ERROR "CSFH_FUZZ needs CSFH_BUILD_FMU=ON (FMI headers and SUNDIALS)")
 endif()
-set(CSFH_FUZZ_CVODE SUNDIALS::cvode_static CACHE STRING
+set(CSFH_FUZZ_CVODE csfh_sundials CACHE STRING
     "CVODE for the fuzz executables (target or libraries)")
 set(CSFH_FUZZ_FLAGS -fsanitize=address,undefined -fno-sanitize-recover=all
                     -fno-omit-frame-pointer -O1 -g)

@@ -21,7 +21,7 @@ Optional keys of [model] name the C side; their defaults are the csfh model's:
 The model's `version` is the package's (python/csfh/_version.py, the one place of the version;
 CMake passes it as --version).
 
-Usage: generate.py [--version X.Y.Z] VARIABLES_TOML OUTDIR
+Usage: generate.py [--version X.Y.Z] VARIABLES_TOML OUTDIR [--source-files NAME ...]
 """
 
 from __future__ import annotations
@@ -161,7 +161,11 @@ def guid_of(spec: dict) -> str:
 # modelDescription.xml
 
 
-def xml_model_description(spec: dict, guid: str, epoch: int) -> str:
+def xml_model_description(
+    spec: dict, guid: str, epoch: int, source_files: tuple[str, ...] = ()
+) -> str:
+    """The model description; `source_files` (file names under sources/) become <SourceFiles>
+    of both interfaces (a source FMU, built by cmake/fmu.cmake)."""
     model = spec["model"]
     variables = spec["variables"]
     units = {u["name"]: u for u in spec.get("units", [])}
@@ -183,15 +187,29 @@ def xml_model_description(spec: dict, guid: str, epoch: int) -> str:
         f'numberOfEventIndicators="{model["numberOfEventIndicators"]}">'
     )
     mi = model["modelIdentifier"]
-    w(
-        f'  <ModelExchange modelIdentifier="{mi}" canGetAndSetFMUstate="true" '
+
+    def interface(tag: str, attrs: str) -> None:
+        """<ModelExchange>, <CoSimulation>: with <SourceFiles> when the FMU carries sources."""
+        if not source_files:
+            w(f"  <{tag} {attrs}/>")
+            return
+        w(f"  <{tag} {attrs}>")
+        w("    <SourceFiles>")
+        for name in source_files:
+            w(f"      <File name={quoteattr(name)}/>")
+        w("    </SourceFiles>")
+        w(f"  </{tag}>")
+
+    interface(
+        "ModelExchange",
+        f'modelIdentifier="{mi}" canGetAndSetFMUstate="true" '
         f'canSerializeFMUstate="true" canNotUseMemoryManagementFunctions="true" '
-        f'completedIntegratorStepNotNeeded="true"/>'
+        f'completedIntegratorStepNotNeeded="true"',
     )
     if "cosimulation" in spec:
         cs = spec["cosimulation"]
         attrs = " ".join(f'{k}="{str(v).lower()}"' for k, v in cs.items())
-        w(f'  <CoSimulation modelIdentifier="{mi}" {attrs}/>')
+        interface("CoSimulation", f'modelIdentifier="{mi}" {attrs}')
     w("  <UnitDefinitions>")
     for u in spec["units"]:
         base = {k: u[k] for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad") if k in u}
@@ -472,6 +490,13 @@ def main(argv: list[str]) -> int:
         default=None,
         help="generationDateAndTime in seconds since 1970 (default: $SOURCE_DATE_EPOCH, else now)",
     )
+    ap.add_argument(
+        "--source-files",
+        nargs="+",
+        default=[],
+        metavar="NAME",
+        help="the .c files under the FMU's sources/ (written as <SourceFiles>)",
+    )
     args = ap.parse_args(argv)
     try:
         spec = load(args.variables)
@@ -487,7 +512,9 @@ def main(argv: list[str]) -> int:
     prefix = c_names(spec)[0]
     source = args.variables.name
     files = {
-        "modelDescription.xml": xml_model_description(spec, guid, epoch),
+        "modelDescription.xml": xml_model_description(
+            spec, guid, epoch, tuple(args.source_files)
+        ),
         f"{prefix}_variables.h": c_header(spec, guid, source),
         f"{prefix}_enums.h": c_enums(spec, source),
         f"{prefix}_variables.c": c_source(spec, source),

@@ -1,7 +1,11 @@
 #!/usr/bin/env bash
 # Set up csfh on a Debian machine, in three steps:
-#   1. the system packages it builds with (libsundials-dev, CMake, Ninja, a C compiler; libtbb12
-#      for the Ecos engine of the tests), if missing;
+#   1. the system packages it builds with, if missing: CMake, Ninja, a C compiler, dpkg-dev and a
+#      deb-src entry (the build fetches SUNDIALS' source with `apt-get source sundials`,
+#      cmake/sundials.cmake; the cross compiler is zig, from PyPI); with the `test` extra also
+#      wine64 (runs the win64 FMU), llvm and binutils (checks of the win64 and darwin64
+#      binaries), libsundials-dev (the comparison with Debian's unoptimised build,
+#      benchmarks/bench_sundials_build.py) and libtbb12 (the Ecos engine of the tests);
 #   2. a virtual environment with Python >= 3.11: .venv in the repository (created if missing);
 #   3. the Python package into it (pip builds the FMU with CMake through scikit-build-core and ships
 #      it inside csfh/); skipped when nothing it is built from has changed since the last install.
@@ -44,17 +48,31 @@ sudo=""
 apt_install() {
   echo "setup: installing $* (apt-get)"
   $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "$@" >/dev/null
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "$@" >/dev/null
 }
 
-step 1 "system packages: libsundials-dev, cmake, ninja-build, gcc, libtbb12"
+step 1 "system packages: cmake, ninja-build, gcc, dpkg-dev (+ deb-src)${extras:+, and what the extras need}"
+need_update=0
+# deb-src for the suite this machine runs (SUNDIALS' source package)
+if ! grep -rqsE '^(deb-src |Types:.*deb-src)' /etc/apt/sources.list /etc/apt/sources.list.d/; then
+  codename="$(. /etc/os-release && echo "${VERSION_CODENAME:-bookworm}")"
+  echo "setup: adding deb-src entries for $codename"
+  printf '%s\n' "Types: deb-src" "URIs: http://deb.debian.org/debian" \
+    "Suites: $codename $codename-updates" "Components: main" \
+    "Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg" |
+    $sudo tee /etc/apt/sources.list.d/debian-src.sources >/dev/null
+  need_update=1
+fi
 missing=()
-# libtbb12: the Ecos co-simulation engine (ecospy, tests/python/test_registry_importers.py)
-for pkg in libsundials-dev cmake ninja-build gcc libtbb12; do
+packages=(cmake ninja-build gcc make dpkg-dev)
+case ",$extras," in *,test,*) packages+=(wine64 llvm binutils libsundials-dev libtbb12) ;; esac
+for pkg in "${packages[@]}"; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
 done
 if [ ${#missing[@]} -gt 0 ]; then
   apt_install "${missing[@]}"
+elif [ "$need_update" -eq 1 ]; then
+  $sudo apt-get update -qq
 else
   echo "setup: all present"
 fi
@@ -85,12 +103,12 @@ else
 fi
 vpy="$venv/bin/python"
 
-step 3 "the csfh package${extras:+ with extras $extras} (pip builds the FMU: about a minute)"
+step 3 "the csfh package${extras:+ with extras $extras} (pip builds the FMUs for every platform: several minutes the first time)"
 stamp="$venv/.csfh-install-stamp"
 inputs_hash() {
   {
     printf '%s\n' "extras=$extras" "$("$vpy" -c 'import sys; print(sys.version)')"
-    find pyproject.toml CMakeLists.txt python fmu_src modelDescription -type f \
+    find pyproject.toml CMakeLists.txt cmake tools/fmu_package.py tools/macho_fat.py python fmu_src modelDescription -type f \
       ! -path '*/__pycache__/*' ! -name '*.pyc' -print0 | LC_ALL=C sort -z | xargs -0 sha256sum
   } | sha256sum | cut -d' ' -f1
 }

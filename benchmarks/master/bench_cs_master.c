@@ -10,19 +10,26 @@
  * loop time, the final values of the read variables, and the values of the count variables.
  *
  * Usage: bench_cs_master BINARY GUID RTOL H STOP REPEATS READ COUNT [VR:TYPE=VALUE ...]
- *   BINARY   path of binaries/linux64/<model>.so in the unzipped FMU
+ *   BINARY   path of binaries/<platform>/<model>.{so,dll,dylib} in the unzipped FMU
  *   READ     comma-separated value references of Reals read at every communication point
  *   COUNT    comma-separated value references of Integers read at the end
  *   TYPE     r (Real), i (Integer) or b (Boolean)
- * The headers are fmpy's FMI 2.0 headers, as for the FMU itself. */
+ * The headers are fmpy's FMI 2.0 headers, as for the FMU itself. Portable C11: POSIX (dlopen,
+ * clock_gettime) or Windows (LoadLibrary, QueryPerformanceCounter), so the same master runs the
+ * win64 binary (cross-built by cmake/platforms.cmake, run under wine in
+ * tests/python/test_platforms.py). */
+#if defined(_WIN32)
+#include <windows.h>
+#else
 #define _POSIX_C_SOURCE 200809L
 #include <dlfcn.h>
+#include <time.h>
+#endif
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "fmi2Functions.h"
 
@@ -58,9 +65,66 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status
     }
 }
 
-static void *symbol(void *dll, const char *name)
+/* the shared library: the one platform-specific part besides the clock */
+typedef void (*function_t)(void);
+
+#if defined(_WIN32)
+static void *library_open(const char *path)
 {
-    void *p = dlsym(dll, name);
+    return (void *)LoadLibraryA(path);
+}
+static function_t library_symbol(void *library, const char *name)
+{
+    return (function_t)(void (*)(void))GetProcAddress((HMODULE)library, name);
+}
+static const char *library_error(void)
+{
+    static char message[64];
+    snprintf(message, sizeof message, "LoadLibrary failed, error %lu", (unsigned long)GetLastError());
+    return message;
+}
+static void library_close(void *library)
+{
+    FreeLibrary((HMODULE)library);
+}
+static double now(void)
+{
+    LARGE_INTEGER count, frequency;
+    QueryPerformanceCounter(&count);
+    QueryPerformanceFrequency(&frequency);
+    return (double)count.QuadPart / (double)frequency.QuadPart;
+}
+#else
+static void *library_open(const char *path)
+{
+    return dlopen(path, RTLD_NOW | RTLD_LOCAL);
+}
+static function_t library_symbol(void *library, const char *name)
+{
+    void *p = dlsym(library, name);
+    function_t f;
+    memcpy(&f, &p, sizeof f); /* POSIX: object and function pointers have the same form */
+    return f;
+}
+static const char *library_error(void)
+{
+    return dlerror();
+}
+static void library_close(void *library)
+{
+    dlclose(library);
+}
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+#endif
+
+static function_t symbol(void *dll, const char *name)
+{
+    function_t p = library_symbol(dll, name);
     if (p == NULL) {
         fprintf(stderr, "bench_cs_master: %s not found\n", name);
         exit(2);
@@ -68,8 +132,12 @@ static void *symbol(void *dll, const char *name)
     return p;
 }
 
-/* Function pointers from dlsym (POSIX guarantees the conversion). */
-#define LOAD(field, name) *(void **)(&api->field) = symbol(dll, name)
+/* every function pointer has the same representation on the platforms the FMU is built for */
+#define LOAD(field, name)                                                                        \
+    do {                                                                                         \
+        const function_t f_ = symbol(dll, name);                                                 \
+        memcpy(&api->field, &f_, sizeof f_);                                                     \
+    } while (0)
 
 static void load(void *dll, fmi_api_t *api)
 {
@@ -138,13 +206,6 @@ static void set_start(const fmi_api_t *api, fmi2Component c, int argc, char **ar
     }
 }
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static int compare(const void *a, const void *b)
 {
     const double x = *(const double *)a, y = *(const double *)b;
@@ -181,9 +242,9 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    void *dll = dlopen(binary, RTLD_NOW | RTLD_LOCAL);
+    void *dll = library_open(binary);
     if (dll == NULL) {
-        fprintf(stderr, "bench_cs_master: %s\n", dlerror());
+        fprintf(stderr, "bench_cs_master: %s: %s\n", binary, library_error());
         return 2;
     }
     fmi_api_t api_storage;
@@ -228,6 +289,6 @@ int main(int argc, char **argv)
     }
     printf("]}\n");
     api->free_instance(c);
-    dlclose(dll);
+    library_close(dll);
     return 0;
 }
