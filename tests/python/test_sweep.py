@@ -162,6 +162,11 @@ def test_quick_sweep_writes_its_report(serial_sweep: Path) -> None:
     for model in data["models"]:
         assert data["runs"][model]["h"]["combined"]["x"]["level"] == 3, model
     assert data["run"]["tasks"] == 4 * 5
+    # the report is one output set (csfh.output); the result store is not part of it
+    manifest = json.loads((serial_sweep / ".csfh" / "sweep.json").read_text())
+    assert set(manifest["files"]) == {"sweep.md", "sweep.json"} | {
+        p.name for p in serial_sweep.glob("sweep_*.png")
+    }
 
 
 def test_local_processes_give_the_serial_results(serial_sweep: Path, tmp_path: Path) -> None:
@@ -306,6 +311,8 @@ def test_tolerance_study_is_reproducible(tmp_path: Path) -> None:
     assert all(0.07 < t < 0.074 for t in fc) and len(set(fc)) == 6
     for name in ("tolerance.md", "tolerance_histograms.png"):
         assert (tmp_path / "a" / name).stat().st_size > 0
+    manifest = json.loads((tmp_path / "a" / ".csfh" / "tolerance.json").read_text())
+    assert set(manifest["files"]) == {"tolerance.md", "tolerance.json", "tolerance_histograms.png"}
 
 
 @pytest.mark.parametrize(
