@@ -683,6 +683,48 @@ static void test_start_check_peaks_and_numbers(void)
     CHECK_STR_CONTAINS(msg, "contact.law_number", "names the number");
 }
 
+/* ---------------------------------------------------------------------------------------- */
+/* Each law's force in the model at one state (PHYSICS.md 4.1-4.4): the stiffness the law uses
+ * (spheres for LN_spheres, Hunt-Crossley and Flores; cylinders for LN_cylinders), computed here
+ * from the materials (Eq. 14 external radius, Eq. 16 times L), and its damping factor (4.6):
+ * F_N = K rho^n (1 + xi rho'/rho'-) at the bottom of the bore, in contact mode. */
+static void test_each_law_uses_its_stiffness(void)
+{
+    const double E = 210e9, nu = 0.3, R1 = 0.18, R2 = 0.20, L = 0.025, cr = 0.9;
+    const double sigma = (1.0 - nu * nu) / E;
+    const double K_sph = 4.0 / (3.0 * 2.0 * sigma) * sqrt(R1 * R2 / (R1 + R2));
+    const double K_cyl = 0.25 * TEST_PI / (2.0 * sigma) * L;
+    const struct {
+        int law;
+        const char *name;
+        double K, xi;
+    } cases[] = {
+        {CSFH_CONTACTLAW_LN_SPHERES, "LN_spheres", K_sph, 0.75 * (1.0 - cr * cr)},
+        {CSFH_CONTACTLAW_LN_CYLINDERS, "LN_cylinders", K_cyl, 0.75 * (1.0 - cr * cr)},
+        {CSFH_CONTACTLAW_HUNTCROSSLEY, "HuntCrossley", K_sph, 1.5 * (1.0 - cr)},
+        {CSFH_CONTACTLAW_FLORES, "Flores", K_sph, 8.0 * (1.0 - cr) / (5.0 * cr)},
+    };
+    for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+        csfh_model_t m;
+        char msg[MSG_SIZE] = "";
+        csfh_model_set_defaults(&m);
+        m.p.law = cases[i].law;
+        m.p.flexure_enabled = 0;
+        m.p.friction_enabled = 0;
+        CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, TFMT("%s: prepare", cases[i].name));
+        CHECK_CLOSE(m.d.normal.K, cases[i].K, 1e-13, TFMT("%s: stiffness in use", cases[i].name));
+        const double rho = 2e-5, v = 0.4, onset = 0.8;
+        const double delta = m.d.delta;
+        const double x[6] = {0.0, -(delta + rho), 0.0, 0.0, -v, 0.0};
+        const double rho_seen = (delta + rho) - delta; /* the rounding of delta + rho */
+        m.z.in_contact = 1;
+        m.z.onset_speed = onset;
+        csfh_contact_eval_t c;
+        csfh_model_contact(&m, x, x + 3, &c);
+        CHECK_CLOSE(c.F_N, cases[i].K * pow(rho_seen, 1.5) * (1.0 + cases[i].xi * v / onset), 1e-12,
+                    TFMT("%s: F_N = K rho^1.5 (1 + xi rho'/rho'-)", cases[i].name));
+    }
+}
 
 /* ---------------------------------------------------------------------------------------- */
 /* base acceleration (docs/model.md §14.1) and the stress outputs (§14.2-14.5) */
@@ -788,6 +830,7 @@ int main(void)
     test_events();
     test_energy_conservation();
     test_start_check_peaks_and_numbers();
+    test_each_law_uses_its_stiffness();
     test_base_acceleration_and_stresses();
     return TEST_SUMMARY();
 }
