@@ -77,6 +77,36 @@ static int check_all_values(csfh_model_t *m, char *msg, size_t msg_size)
     return 0;
 }
 
+/* A derived quantity, by the name of its variable, and what it is derived from (for the message
+ * when it is not finite). */
+typedef struct {
+    const char *name;
+    double value;
+    const char *const *from; /* NULL-terminated variable names */
+} derived_check_t;
+
+/* "contact.esdu_F_max = inf is not finite (derived from contact.E1 = 1e+308, ...)" */
+static void derived_not_finite(csfh_model_t *m, const derived_check_t *q, char *msg,
+                               size_t msg_size)
+{
+    char b[32];
+    int n = snprintf(msg, msg_size, "%s = %s is not finite (derived from ", q->name,
+                     csfh_format_value(b, q->value));
+    for (const char *const *name = q->from; *name != NULL; name++) {
+        const csfh_variable_t *v = csfh_variable_by_name(*name);
+        const double value = v == NULL                    ? NAN
+                             : v->type == CSFH_TYPE_REAL ? *csfh_variable_real(m, v)
+                                                         : (double)*csfh_variable_int(m, v);
+        if (n >= 0 && (size_t)n < msg_size) {
+            n += snprintf(msg + n, msg_size - (size_t)n, "%s%s = %s", name == q->from ? "" : ", ",
+                          *name, csfh_format_value(b, value));
+        }
+    }
+    if (n >= 0 && (size_t)n < msg_size) {
+        snprintf(msg + n, msg_size - (size_t)n, ")");
+    }
+}
+
 int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
 {
     const csfh_params_t *p = &m->p;
@@ -149,11 +179,42 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
     d.R_conformal = p->R1 * p->R2 / (p->R2 - p->R1);
     d.shock_dir[0] = cos(p->shock_angle);
     d.shock_dir[1] = sin(p->shock_angle);
-    const double derived[] = {d.delta, d.K_spheres, d.K_cylinders, d.xi, d.esdu_F_max,
-                              d.sbar[0], d.sbar[1], d.E_star, d.R_conformal};
+    /* every derived quantity finite, else the message names it, its value and the parameters
+     * it is derived from, with their values (e.g. contact.E1 = contact.E2 = 1e308 overflow the
+     * ESDU force scale) */
+    static const char *const from_delta[] = {"contact.R1", "contact.R2", NULL};
+    static const char *const from_spheres[] = {"contact.E1", "contact.nu1", "contact.E2",
+                                               "contact.nu2", "contact.R1", "contact.R2", NULL};
+    static const char *const from_cylinders[] = {"contact.E1", "contact.nu1", "contact.E2",
+                                                 "contact.nu2", "contact.L", NULL};
+    static const char *const from_spheres_given[] = {"contact.K_spheres_given", NULL};
+    static const char *const from_cylinders_given[] = {"contact.K_cylinders_given", NULL};
+    static const char *const from_xi[] = {"contact.law", "contact.cr", NULL};
+    static const char *const from_esdu[] = {"contact.E1", "contact.nu1", "contact.E2",
+                                            "contact.nu2", "contact.L",  "contact.R1",
+                                            "contact.R2", "contact.esdu_sigma_pi", NULL};
+    static const char *const from_sbar1[] = {"flexure.OF[1]", "flexure.rho", "flexure.phi_root",
+                                             "flexure.beta", NULL};
+    static const char *const from_sbar2[] = {"flexure.OF[2]", "flexure.rho", "flexure.phi_root",
+                                             "flexure.beta", NULL};
+    static const char *const from_E_star[] = {"contact.E1", "contact.nu1", "contact.E2",
+                                              "contact.nu2", NULL};
+    const derived_check_t derived[] = {
+        {"contact.delta", d.delta, from_delta},
+        {"contact.K_spheres", d.K_spheres, p->K_from_materials ? from_spheres : from_spheres_given},
+        {"contact.K_cylinders", d.K_cylinders,
+         p->K_from_materials ? from_cylinders : from_cylinders_given},
+        {"contact.xi", d.xi, from_xi},
+        {"contact.esdu_F_max", d.esdu_F_max, from_esdu},
+        {"flexure.sbar[1]", d.sbar[0], from_sbar1},
+        {"flexure.sbar[2]", d.sbar[1], from_sbar2},
+        /* not FMU variables: named by what they are */
+        {"the contact modulus E* (Hertz line contact)", d.E_star, from_E_star},
+        {"the conformal radius R1 R2 / (R2 - R1)", d.R_conformal, from_delta},
+    };
     for (size_t i = 0; i < sizeof(derived) / sizeof(derived[0]); i++) {
-        if (!isfinite(derived[i])) {
-            snprintf(msg, msg_size, "a derived quantity is not finite (check the parameters)");
+        if (!isfinite(derived[i].value)) {
+            derived_not_finite(m, &derived[i], msg, msg_size);
             return -1;
         }
     }

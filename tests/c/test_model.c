@@ -221,6 +221,29 @@ static void test_prepare_rejects(void)
         csfh_model_prepare(&m, msg, sizeof(msg));
         CHECK_STR_CONTAINS(msg, "contact.R2", "R1 >= R2 message names contact.R2 too");
     }
+    /* a derived quantity that overflows is named, with the parameters it comes from and their
+     * values: E1 = E2 = 1e308 are each in range, but the ESDU force scale 4 L dR / sum overflows
+     * (sum = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 ~ 1.8e-308) */
+    {
+        csfh_model_t m;
+        char msg[MSG_SIZE] = "";
+        setup_default(&m);
+        const csfh_derived_t before = m.d;
+        m.p.E1 = 1e308;
+        m.p.E2 = 1e308;
+        CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), -1, "E1 = E2 = 1e308 refused");
+        CHECK_STR_CONTAINS(msg, "contact.esdu_F_max = inf is not finite", "names the quantity");
+        CHECK_STR_CONTAINS(msg, "contact.E1 = 1e+308", "names E1 and its value");
+        CHECK_STR_CONTAINS(msg, "contact.E2 = 1e+308", "names E2 and its value");
+        CHECK_STR_CONTAINS(msg, "contact.R2 = 0.2", "names R2 and its value");
+        CHECK_TRUE(memcmp(&before, &m.d, sizeof(before)) == 0, "derived unchanged (overflow)");
+        /* the message is cut, never overrun, in a short buffer */
+        char small[40];
+        memset(small, 'x', sizeof(small));
+        csfh_model_prepare(&m, small, 24);
+        CHECK_INT((int)strlen(small), 23, "message cut at the buffer size");
+        CHECK_TRUE(small[25] == 'x', "nothing written past the buffer");
+    }
     /* valid boundary values are accepted */
     const struct {
         const char *name;

@@ -475,3 +475,37 @@ def test_shock_report_is_consistent_with_its_runs(tmp_path: Path) -> None:
     assert len(store) == 2 * 4 + 2 * 21
     md = (out / "shock.md").read_text()
     assert "JESD22-B104-B" in md and "Clopper-Pearson" in md and "Per direction" in md
+    # the report is one output set (csfh.output): a run without the Monte Carlo replaces it whole
+    manifest = json.loads((out / ".csfh" / "shock.json").read_text())
+    assert set(manifest["files"]) == {
+        "shock.md",
+        "shock.json",
+        "shock_time.png",
+        "shock_polar.png",
+        "shock_montecarlo.png",
+    }
+    assert (
+        main(
+            [
+                "shock",
+                "mems",
+                "--directions",
+                "4",
+                "--models",
+                "LN_spheres",
+                "Flores",
+                "--stop-time",
+                "4e-4",
+                "--step",
+                "1e-6",
+                "--out",
+                str(out),
+                "--workers",
+                "1",
+                "--quiet",
+            ]
+        )
+        == code
+    )
+    assert not (out / "shock_montecarlo.png").exists()
+    assert "Monte Carlo" not in (out / "shock.md").read_text()

@@ -190,14 +190,24 @@ def test_scene_loader_refuses_a_deep_start(tmp_path) -> None:
     )
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "deep in the bore" in r.stderr
-    # an override of the limit lets the scene through
+    # an override of the limit lets a deeper start through (1.5e-3 m > 1e-3 m), up to the
+    # harness's own limit of 1 % of R1 (1.8e-3 m: Hertz contact needs indentations small
+    # against the radii), which no override raises
     scene_from_dict(
         {
             "name": "deep",
-            "initial": {"q": [0.05, 0.0, 0.0]},
+            "initial": {"q": [0.0215, 0.0, 0.0]},
             "parameters": {"contact.max_initial_indentation": 0.04},
         }
     )
+    with pytest.raises(SceneError, match=r"at most 0\.01 contact\.R1 = 0\.0018 m"):
+        scene_from_dict(
+            {
+                "name": "deep",
+                "initial": {"q": [0.05, 0.0, 0.0]},
+                "parameters": {"contact.max_initial_indentation": 0.04},
+            }
+        )
 
 
 def test_model_exchange_runner_has_a_step_budget() -> None:

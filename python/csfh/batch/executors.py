@@ -8,9 +8,11 @@ import hashlib
 import math
 import multiprocessing
 import os
+import signal
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -113,6 +115,36 @@ def run_tasks(
     )
 
 
+@contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT held back in this thread (delivered when the block ends, never lost). Processes
+    started meanwhile inherit the block: a Ctrl-C while a worker starts up and imports csfh
+    stays pending there until `worker_init` ignores it, instead of a KeyboardInterrupt traceback
+    from every worker."""
+    if not hasattr(signal, "pthread_sigmask"):  # not POSIX
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """End a pool now: pending chunks cancelled, running ones abandoned (the workers ignore
+    Ctrl-C, so they are terminated), the executor's own thread left to wind down without errors.
+    What was accepted is in the store already."""
+    # the pool's worker processes (a private attribute: the public API cannot end them)
+    workers = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in workers:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in workers:
+        proc.join(timeout=10)
+
+
 def _run_processes(
     chunks: list[list[Task]], workers: int, accept: Callable[[Iterable[Result]], None]
 ) -> None:
@@ -126,14 +158,13 @@ def _run_processes(
         queue = sorted(chunks, key=len)
         while queue or futures:
             while queue and len(futures) < 2 * workers:
-                futures.add(pool.submit(run_chunk, queue.pop()))
+                with _sigint_blocked():  # a submit may start a worker process
+                    futures.add(pool.submit(run_chunk, queue.pop()))
             finished, futures = wait(futures, return_when=FIRST_COMPLETED)
             for fut in finished:
                 accept(fut.result())
     except BaseException:
-        for fut in futures:
-            fut.cancel()
-        pool.shutdown(wait=False, cancel_futures=True)
+        _stop_pool(pool)
         raise
     pool.shutdown(wait=True)
 

@@ -326,5 +326,9 @@ def batchable(tasks: Sequence[Task]) -> bool:
 
 
 def worker_init() -> None:
-    # Ctrl-C goes to the whole process group: let the parent decide (it keeps what is done)
+    """Ctrl-C goes to the whole process group: a worker ignores it and the parent decides (it
+    keeps what is done and ends the workers). The parent starts workers with SIGINT blocked, so
+    that one during the start-up is discarded here too."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})

@@ -31,13 +31,14 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from ..model.scene import load_scene
+    from ..output import output_set
     from ..runners.simulate import simulate
 
     scene = load_scene(args.scene)
     out = out_dir(args, scene.name)
-    out.mkdir(parents=True, exist_ok=True)
     tr = simulate(scene, args.law, interface=args.interface, quiet=args.quiet)
-    path = tr.write_csv(out / f"{tr.model}.csv")
+    with output_set(out, f"run.{tr.model}"):
+        path = tr.write_csv(out / f"{tr.model}.csv")
     s = tr.summary()
     first = s["first_contact_time"]
     print(

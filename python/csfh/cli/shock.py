@@ -200,6 +200,7 @@ def _run(
     from ..batch.store import ResultStore
     from ..model import model_info
     from ..model.scene import load_scene
+    from ..output import output_set
     from ..studies.shock import report, study
     from ..studies.tolerance import study as tolerance
 
@@ -295,16 +296,19 @@ def _run(
     run_info.update(counts)
     run_info["executor"] = executor
     run_info["wall_time"] = time.perf_counter() - wall
-    figures = [
-        report.plot_time(out / "shock_time.png", spec, series, result),
-        report.plot_polar(out / "shock_polar.png", spec, result),
-    ]
-    if mc is not None:
-        figures.append(
-            report.plot_montecarlo(out / "shock_montecarlo.png", spec, mc, result["allowables"])
-        )
-    report.write_json_report(out / "shock.json", spec, result, run_info, mc)
-    report.write_markdown(out / "shock.md", spec, result, run_info, figures, mc)
+    # the report replaces the previous one as a whole (a run without --tolerance leaves no stale
+    # Monte Carlo figure); the result store is not part of it
+    with output_set(out, "shock"):
+        figures = [
+            report.plot_time(out / "shock_time.png", spec, series, result),
+            report.plot_polar(out / "shock_polar.png", spec, result),
+        ]
+        if mc is not None:
+            figures.append(
+                report.plot_montecarlo(out / "shock_montecarlo.png", spec, mc, result["allowables"])
+            )
+        report.write_json_report(out / "shock.json", spec, result, run_info, mc)
+        report.write_markdown(out / "shock.md", spec, result, run_info, figures, mc)
     if not args.quiet:
         for m, r in result["models"].items():
             print(

@@ -14,18 +14,20 @@ import math
 import shutil
 import tempfile
 import time
-from ctypes import byref, c_int, c_long, c_void_p
+from ctypes import byref, c_int, c_long, c_void_p, cast
 from functools import cache
 from typing import Any
 
 import numpy as np
 from fmpy import extract
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.model_description import ModelDescription
 
 from ..errors import SimulationError
 from ..model import model_info
-from ..model.scene import Scene
+from ..model.fmus import FmuLog
+from ..model.scene import MAX_OUTPUT_SAMPLES, Scene
 from ..paths import fmu_path
 from ..progress import Progress
 from ..trajectory import CONTACT_FIELDS, Trajectory
@@ -115,6 +117,8 @@ def _apply_start_values(
 
 
 def _instantiate(cls: type, md: ModelDescription, kind: str) -> FMU2Model | FMU2Slave:
+    """An instance whose log keeps the FMU's error messages (`_fmu_error` reports them), instead
+    of fmpy's default logger printing them on standard output."""
     interface = md.modelExchange if kind == "ME" else md.coSimulation
     fmu = cls(
         guid=md.guid,
@@ -122,8 +126,34 @@ def _instantiate(cls: type, md: ModelDescription, kind: str) -> FMU2Model | FMU2
         modelIdentifier=interface.modelIdentifier,
         instanceName="csfh",
     )
-    fmu.instantiate()
+    log = FmuLog()
+    fmu.instantiate(callbacks=log.callbacks)
+    fmu._csfh_log = log  # the callbacks live as long as the instance
     return fmu
+
+
+def _fmu_error(
+    fmu: FMU2Model | FMU2Slave, law: str, t: float, exc: BaseException
+) -> SimulationError:
+    """One line for a failed FMI call: the model, the time, the call and the FMU's own reason."""
+    log: FmuLog | None = getattr(fmu, "_csfh_log", None)
+    reason = log.reason(str(exc)) if log is not None else str(exc)
+    call = getattr(exc, "function", None) or type(exc).__name__
+    return SimulationError(f"{law}: {call} failed at t = {t:.9g} s: {reason}")
+
+
+def check_rows(t_end: float, step: float, what: str) -> int:
+    """The number of output rows of a run on a grid of `step` up to `t_end`, within the limit of
+    a scene (csfh.model.scene.MAX_OUTPUT_SAMPLES); ValueError naming the values otherwise."""
+    for name, value in (("stop_time", t_end), (what, step)):
+        if not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"{name} = {value!r} must be a finite number > 0")
+    if not t_end / step <= MAX_OUTPUT_SAMPLES:
+        raise ValueError(
+            f"{what} = {step:g} s gives {t_end / step:.3g} output rows over {t_end:g} s; at most "
+            f"{MAX_OUTPUT_SAMPLES:g}"
+        )
+    return math.ceil(t_end / step - 1e-9)
 
 
 class _Table:
@@ -155,7 +185,28 @@ def _one_step_solver(fmu: FMU2Model, rtol: float, t0: float):
         def apply(self, t: float, **_: Any) -> None:
             return None
 
-    solver = CVodeSolver(
+    class _Solver(CVodeSolver):  # type: ignore[misc]
+        """fmpy's solver, whose right-hand side and root function return -1 (CVODE then stops
+        with a failure flag) instead of raising inside the ctypes callback, where the exception
+        would be printed and lost; the first exception is kept in `callback_error`."""
+
+        callback_error: BaseException | None = None
+
+        def f(self, t: float, y: Any, ydot: Any, user_data: Any) -> int:
+            try:
+                return int(super().f(t, y, ydot, user_data))
+            except Exception as exc:  # reported by the caller
+                self.callback_error = self.callback_error or exc
+                return -1
+
+        def g(self, t: float, y: Any, gout: Any, user_data: Any) -> int:
+            try:
+                return int(super().g(t, y, gout, user_data))
+            except Exception as exc:  # reported by the caller
+                self.callback_error = self.callback_error or exc
+                return -1
+
+    solver = _Solver(
         nx=6,
         nz=1,
         get_x=fmu.getContinuousStates,
@@ -169,6 +220,16 @@ def _one_step_solver(fmu: FMU2Model, rtol: float, t0: float):
         relativeTolerance=rtol,
         maxNumSteps=100000,
     )
+    # only fmpy's handler, which keeps CVODE's message for the error we raise: SUNDIALS's default
+    # handler would also print it on standard error
+    clear, push = (
+        sundials_cvode.SUNContext_ClearErrHandlers,
+        sundials_cvode.SUNContext_PushErrHandler,
+    )
+    clear.argtypes, clear.restype = [c_void_p], c_int
+    push.argtypes, push.restype = [c_void_p, c_void_p, c_void_p], c_int
+    if clear(solver.sunctx) != 0 or push(solver.sunctx, cast(solver.ehfun_, c_void_p), None) != 0:
+        raise SimulationError("CVODE: cannot install the error handler")
     api = {}
     for name, args in {
         "CVodeSetStopTime": [c_void_p, sunrealtype],
@@ -248,6 +309,7 @@ def simulate_me(
 
     wall = time.perf_counter()
     fmu = _instantiate(FMU2Model, md, "ME")
+    t = 0.0
     try:
         fmu.setupExperiment(tolerance=rtol, startTime=0.0, stopTime=t_end)
         fmu.enterInitializationMode()
@@ -319,6 +381,7 @@ def simulate_me(
         api["CVodeSetStopTime"](solver.cvode_mem, min(t_end, t_event))
         t = 0.0
         if output_times is None:
+            check_rows(t_end, dt_out, "output_interval")
             grid = np.arange(1, math.floor(t_end / dt_out * (1 + 1e-12)) + 1) * dt_out
         else:
             grid = np.asarray(output_times, dtype=float)
@@ -331,6 +394,8 @@ def simulate_me(
         nst = c_long(0)
         while t < t_end * (1 - 1e-15):
             flag = CVode(solver.cvode_mem, t_end, solver.x, byref(tret), CV_ONE_STEP)
+            if solver.callback_error is not None:
+                raise _fmu_error(fmu, law, t, solver.callback_error)
             if flag < 0:
                 info = solver.error_info or ("?", "?", "?", "no message")
                 raise SimulationError(
@@ -395,6 +460,8 @@ def simulate_me(
         rhs = fmu.getInteger([rhs_vr])[0]
         evaluations = _evaluations(fmu)
         fmu.terminate()
+    except FMICallException as exc:
+        raise _fmu_error(fmu, law, t, exc) from None
     finally:
         fmu.freeInstance()
     tr = Trajectory(
@@ -449,6 +516,7 @@ def simulate_cs(
     active_vr = _vr("contact.active")
     wall = time.perf_counter()
     fmu = _instantiate(FMU2Slave, md, "CS")
+    t = 0.0
     try:
         fmu.setupExperiment(tolerance=rtol, startTime=0.0, stopTime=t_end)
         fmu.enterInitializationMode()
@@ -456,7 +524,7 @@ def simulate_cs(
         fmu.exitInitializationMode()
         table = _Table((*_TABLE_COLUMNS, *CS_OUTPUT_NAMES))
         table.add([0.0, *fmu.getReal(out_vrs)])
-        n = math.ceil(t_end / h - 1e-9)
+        n = check_rows(t_end, h, "communication_step")
         event_vrs = [
             _vr(n)
             for n in (
@@ -506,6 +574,8 @@ def simulate_cs(
         evaluations = _evaluations(fmu)
         final_count = count
         fmu.terminate()
+    except FMICallException as exc:
+        raise _fmu_error(fmu, law, t, exc) from None
     finally:
         fmu.freeInstance()
     cr = _contact_arrays(records)
