@@ -26,7 +26,7 @@ enable_testing()
 # same glue with its own model and table
 set(_fuzz_sources_csfh ${CSFH_FMI_SOURCES} ${CSFH_CORE_SOURCES})
 set(_fuzz_sources_combdrive
-  fmu_src/fmi/fmi2_glue.c fmu_src/fmi/cosimulation.c
+  fmu_src/fmi/fmi2_glue.c fmu_src/fmi/fmu_instance.c fmu_src/fmi/cosimulation.c
   fmu_src/combdrive/combdrive_model.c fmu_src/combdrive/combdrive_fmu_model.c
   fmu_src/core/csfh_vartable.c ${COMBDRIVE_GEN_DIR}/combdrive_variables.c)
 set(_fuzz_gen_csfh ${CSFH_GEN_DIR})

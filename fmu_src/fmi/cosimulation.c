@@ -26,7 +26,7 @@
  * (FMU_DEFAULT_TOLERANCE = 1e-6 when none is given), absolute = relative x the nominal value of
  * each state.
  *
- * A CVODE failure returns fmi2Error with CVODE's own message and return flag in the log; the
+ * A CVODE failure returns FMU_ERROR with CVODE's own message and return flag in the log; the
  * instance then holds the last state CVODE reached successfully, at that time (also reported by
  * fmi2GetRealStatus(fmi2LastSuccessfulTime)); fmi2SetFMUstate can roll it back.
  *
@@ -37,7 +37,7 @@
  * time: a run from t0 = 1e10 s reproduces the run from 0, shifted, where CVODE in the absolute
  * time could not resolve its steps (ulp(1e10) = 1.9e-6 s) and drifted. A communication point
  * maps to tau exactly (t_end - origin, both multiples of ulp(origin) near the origin). CVODE's
- * own warnings (e.g. "t + h = t" after a very long run) make fmi2DoStep return fmi2Warning;
+ * own warnings (e.g. "t + h = t" after a very long run) make fmi2DoStep return FMU_WARNING;
  * fmi2DoStep itself (fmi2_glue.c) reports steps that the double time cannot resolve.
  *
  * A model without continuous states (the comb-drive actuator) just advances its time. */
@@ -119,7 +119,7 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *gout, void *user_data)
     fmu_model.event_indicators(inst->model, N_VGetArrayPointer(y), gout);
     for (int i = 0; i < fmu_model.n_event_indicators; i++) {
         if (!isfinite(gout[i])) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR,
                     "fmi2DoStep: non-finite event indicator z[%d] = %g", i, gout[i]);
             return 1; /* CVODE fails the step (CV_RTFUNC_FAIL) */
         }
@@ -132,12 +132,12 @@ static void error_handler(int error_code, const char *module, const char *functi
 {
     fmu_instance_t *inst = (fmu_instance_t *)user_data;
     if (error_code < 0) {
-        fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "%s %s: %s", module, function, msg);
+        fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s %s: %s", module, function, msg);
     } else {
         if (inst->cvode != NULL) {
-            inst->cvode->warnings++; /* fmi2DoStep returns fmi2Warning */
+            inst->cvode->warnings++; /* fmi2DoStep returns FMU_WARNING */
         }
-        fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING, "%s %s (local time from t0 = %.17g): %s",
+        fmu_log(inst, FMU_WARNING, LOG_STATUS_WARNING, "%s %s (local time from t0 = %.17g): %s",
                 module, function, inst->cvode != NULL ? inst->cvode->origin : 0.0, msg);
     }
 }
@@ -182,16 +182,16 @@ void cs_free(fmu_instance_t *inst)
     inst->cvode = NULL;
 }
 
-static fmi2Status cv_check(fmu_instance_t *inst, int flag, const char *call)
+static fmu_status_t cv_check(fmu_instance_t *inst, int flag, const char *call)
 {
     if (flag >= 0) {
-        return fmi2OK;
+        return FMU_OK;
     }
     char *name = CVodeGetReturnFlagName(flag);
-    fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: %s failed with %s at t = %.17g", call,
+    fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "fmi2DoStep: %s failed with %s at t = %.17g", call,
             name != NULL ? name : "an unknown flag", *fmu_time(inst));
     free(name);
-    return fmi2Error;
+    return FMU_ERROR;
 }
 
 /* auto: a new window of steps (CVODE's counters restart with every (re)initialisation). */
@@ -219,7 +219,7 @@ static int configured_method(const fmu_instance_t *inst)
 /* (Re)create CVODE's memory with `method` (FMU_CS_BDF or FMU_CS_ADAMS) at the local time tau
  * and the FMU's state; the vectors, the matrix and the solvers are kept from one method to the
  * next. */
-static fmi2Status cv_create(fmu_instance_t *inst, int method, double tau)
+static fmu_status_t cv_create(fmu_instance_t *inst, int method, double tau)
 {
     csfh_cvode_t *cv = inst->cvode;
     if (cv->mem != NULL) {
@@ -235,30 +235,30 @@ static fmi2Status cv_create(fmu_instance_t *inst, int method, double tau)
         cv->LS = cv->J != NULL ? SUNLinSol_Dense(cv->y, cv->J, cv->ctx) : NULL;
     }
     if (cv->mem == NULL || (method == FMU_CS_ADAMS ? cv->NLS == NULL : cv->LS == NULL)) {
-        fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate CVODE");
-        return fmi2Error;
+        fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate CVODE");
+        return FMU_ERROR;
     }
     cv->method = method;
     cv->counted_steps = 0;
     cv->root_pending = 0;
     start_window(cv, tau);
-    fmi2Status s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
-    if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, tau, cv->y), "CVodeInit");
-    if (s == fmi2OK) s = cv_check(inst, CVodeSetUserData(cv->mem, inst), "CVodeSetUserData");
-    if (s == fmi2OK) s = cv_check(inst, CVodeSVtolerances(cv->mem, inst->tolerance, cv->abstol), "CVodeSVtolerances");
-    if (s == fmi2OK && method == FMU_CS_ADAMS) {
+    fmu_status_t s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
+    if (s == FMU_OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, tau, cv->y), "CVodeInit");
+    if (s == FMU_OK) s = cv_check(inst, CVodeSetUserData(cv->mem, inst), "CVodeSetUserData");
+    if (s == FMU_OK) s = cv_check(inst, CVodeSVtolerances(cv->mem, inst->tolerance, cv->abstol), "CVodeSVtolerances");
+    if (s == FMU_OK && method == FMU_CS_ADAMS) {
         s = cv_check(inst, CVodeSetNonlinearSolver(cv->mem, cv->NLS), "CVodeSetNonlinearSolver");
-    } else if (s == fmi2OK) {
+    } else if (s == FMU_OK) {
         s = cv_check(inst, CVodeSetLinearSolver(cv->mem, cv->LS, cv->J), "CVodeSetLinearSolver");
     }
-    if (s == fmi2OK) s = cv_check(inst, CVodeRootInit(cv->mem, fmu_model.n_event_indicators, roots), "CVodeRootInit");
-    if (s == fmi2OK) s = cv_check(inst, CVodeSetNoInactiveRootWarn(cv->mem), "CVodeSetNoInactiveRootWarn");
+    if (s == FMU_OK) s = cv_check(inst, CVodeRootInit(cv->mem, fmu_model.n_event_indicators, roots), "CVodeRootInit");
+    if (s == FMU_OK) s = cv_check(inst, CVodeSetNoInactiveRootWarn(cv->mem), "CVodeSetNoInactiveRootWarn");
     return s;
 }
 
 /* Create CVODE (first step) or re-initialise it at the current state, with the configured
  * method (auto starts with Adams); the FMU's time becomes the origin of CVODE's local time. */
-static fmi2Status cs_start(fmu_instance_t *inst)
+static fmu_status_t cs_start(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
     if (cv != NULL && cv->tolerance != inst->tolerance) {
@@ -277,23 +277,23 @@ static fmi2Status cs_start(fmu_instance_t *inst)
     if (cv == NULL) {
         cv = (csfh_cvode_t *)calloc(1, sizeof(*cv));
         if (cv == NULL) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: out of memory");
-            return fmi2Error;
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "fmi2DoStep: out of memory");
+            return FMU_ERROR;
         }
         inst->cvode = cv;
         cv->tolerance = inst->tolerance;
         if (SUNContext_Create(NULL, &cv->ctx) != 0) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: SUNContext_Create failed");
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "fmi2DoStep: SUNContext_Create failed");
             cs_free(inst);
-            return fmi2Error;
+            return FMU_ERROR;
         }
         cv->y = N_VNew_Serial(NX, cv->ctx);
         cv->abstol = N_VNew_Serial(NX, cv->ctx);
         cv->y_root = N_VNew_Serial(NX, cv->ctx);
         if (cv->y == NULL || cv->abstol == NULL || cv->y_root == NULL) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate CVODE");
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate CVODE");
             cs_free(inst);
-            return fmi2Error;
+            return FMU_ERROR;
         }
         /* absolute tolerance: relative tolerance times the nominal value of each state */
         double *atol = N_VGetArrayPointer(cv->abstol);
@@ -305,8 +305,8 @@ static fmi2Status cs_start(fmu_instance_t *inst)
         }
     }
     cv->origin = *fmu_time(inst);
-    const fmi2Status s = cv_create(inst, method, 0.0);
-    if (s != fmi2OK) {
+    const fmu_status_t s = cv_create(inst, method, 0.0);
+    if (s != FMU_OK) {
         cs_free(inst);
         return s;
     }
@@ -536,11 +536,11 @@ static void take_solution(fmu_instance_t *inst, double tret)
 
 /* The step ends at t_end: evaluate the outputs once (a model warning is logged once, a
  * non-finite output is an error). */
-static fmi2Status finish_step(fmu_instance_t *inst, double t_end, fmi2Status status)
+static fmu_status_t finish_step(fmu_instance_t *inst, double t_end, fmu_status_t status)
 {
     *fmu_time(inst) = t_end; /* exact communication point (tret == t_end up to round-off) */
     fmu_invalidate(inst);
-    const fmi2Status s = fmu_update_outputs(inst, "fmi2DoStep");
+    const fmu_status_t s = fmu_update_outputs(inst, "fmi2DoStep");
     return s > status ? s : status;
 }
 
@@ -550,7 +550,7 @@ static fmi2Status finish_step(fmu_instance_t *inst, double t_end, fmi2Status sta
  * straddles it; it returns CV_TSTOP_RETURN there, and cs_do_step restarts it as at a state
  * event. Without time events nothing here is called. */
 
-static fmi2Status set_time_event_stop(fmu_instance_t *inst)
+static fmu_status_t set_time_event_stop(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
     double tn = 0.0;
@@ -559,25 +559,25 @@ static fmi2Status set_time_event_stop(fmu_instance_t *inst)
     for (int i = 0; i < 8; i++) { /* events that round to CVODE's current time are behind it */
         const double te = fmu_model.next_time_event(inst->model, after);
         if (!isfinite(te)) {
-            return fmi2OK;
+            return FMU_OK;
         }
         if (te - cv->origin > tn) {
             return cv_check(inst, CVodeSetStopTime(cv->mem, te - cv->origin), "CVodeSetStopTime");
         }
         after = te;
     }
-    return fmi2OK;
+    return FMU_OK;
 }
 
-fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
+fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs)
 {
     const double now_abs = *fmu_time(inst);
     if (NX == 0) {
-        return finish_step(inst, t_end_abs, fmi2OK); /* no continuous states: nothing to integrate */
+        return finish_step(inst, t_end_abs, FMU_OK); /* no continuous states: nothing to integrate */
     }
     if (inst->cvode == NULL || inst->cvode_needs_reinit) {
-        if (cs_start(inst) != fmi2OK) {
-            return fmi2Error;
+        if (cs_start(inst) != FMU_OK) {
+            return FMU_ERROR;
         }
         inst->cvode_needs_reinit = 0;
         peaks_forget(inst->cvode); /* a new interpolant */
@@ -617,9 +617,9 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             /* tout only sets the size of the first step after a (re)start (CVODE's estimate is
              * bounded by a tenth of the distance to tout): a fixed horizon, so that the step
              * sequence does not depend on the communication grid */
-            if (fmu_model.next_time_event != NULL && set_time_event_stop(inst) != fmi2OK) {
+            if (fmu_model.next_time_event != NULL && set_time_event_stop(inst) != FMU_OK) {
                 inst->cvode_needs_reinit = 1;
-                return fmi2Error;
+                return FMU_ERROR;
             }
             flag = CVode(cv->mem, tret + FIRST_STEP_HORIZON, cv->y, &tret, CV_ONE_STEP);
             stepped = flag >= 0;
@@ -647,12 +647,12 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             if (finite) {
                 take_solution(inst, tret);
             }
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR,
                     "fmi2DoStep: the step from t = %.17g to %.17g failed; the FMU holds the last "
                     "successful state, at t = %.17g",
                     now_abs, t_end_abs, *fmu_time(inst));
             inst->cvode_needs_reinit = 1;
-            return fmi2Error;
+            return FMU_ERROR;
         }
         track_peaks(inst, tret_before, tret, stepped);
         take_solution(inst, tret);
@@ -660,21 +660,21 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             break;
         }
         if (steps > MAX_STEPS_PER_CALL) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR,
                     "fmi2DoStep: more than %ld CVODE steps in the step from t = %.17g to %.17g; "
                     "the FMU holds the state at t = %.17g",
                     MAX_STEPS_PER_CALL, now_abs, t_end_abs, *fmu_time(inst));
             inst->cvode_needs_reinit = 1;
-            return fmi2Error;
+            return FMU_ERROR;
         }
         int restart = 0;
         if (flag == CV_ROOT_RETURN) {
             if (++events > MAX_EVENTS_PER_STEP) {
-                fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
+                fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR,
                         "fmi2DoStep: more than %ld events in one step at t = %.17g",
                         MAX_EVENTS_PER_STEP, *fmu_time(inst));
                 inst->cvode_needs_reinit = 1;
-                return fmi2Error;
+                return FMU_ERROR;
             }
             /* the discrete state changed: restart the integrator at the event (auto: with
              * Adams again) */
@@ -686,7 +686,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             restart = 1; /* a time event: the right-hand side's kink (see set_time_event_stop) */
             peaks_forget(cv);
         }
-        fmi2Status s = fmi2OK;
+        fmu_status_t s = FMU_OK;
         if (restart && automatic && cv->method != FMU_CS_ADAMS) {
             s = cv_create(inst, FMU_CS_ADAMS, tret);
             start_segment(cv, tret);
@@ -699,7 +699,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             char why[160];
             const int method = auto_choose(cv, tret, why, sizeof(why));
             if (why[0] != '\0') {
-                fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", why);
+                fmu_log(inst, FMU_OK, LOG_EVENTS, "%s", why);
             }
             if (method == cv->method) {
                 continue;
@@ -708,17 +708,17 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
         } else {
             continue;
         }
-        if (s != fmi2OK) {
+        if (s != FMU_OK) {
             inst->cvode_needs_reinit = 1;
-            return fmi2Error;
+            return FMU_ERROR;
         }
     }
     /* CVODE warned (logged by error_handler): the step is done, with a caveat */
-    return finish_step(inst, t_end_abs, cv->warnings > warnings ? fmi2Warning : fmi2OK);
+    return finish_step(inst, t_end_abs, cv->warnings > warnings ? FMU_WARNING : FMU_OK);
 }
 
-fmi2Status cs_reset(fmu_instance_t *inst)
+fmu_status_t cs_reset(fmu_instance_t *inst)
 {
     cs_free(inst);
-    return fmi2OK;
+    return FMU_OK;
 }
