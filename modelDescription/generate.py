@@ -387,7 +387,12 @@ def xml_model_description(
 # --------------------------------------------------------------------------------------------
 # modelDescription.xml, FMI 3.0
 
-FMI3_TYPE = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "Enumeration": "Enumeration"}
+FMI3_TYPE = {
+    "Real": "Float64",
+    "Integer": "Int32",
+    "Boolean": "Boolean",
+    "Enumeration": "Enumeration",
+}
 # [cosimulation] keys of FMI 2.0 and their FMI 3.0 names (None: not in FMI 3.0)
 FMI3_CS_ATTRIBUTES = {
     "canHandleVariableCommunicationStepSize": "canHandleVariableCommunicationStepSize",
@@ -593,7 +598,9 @@ def xml_model_description_fmi3(
             and v.get("initial") in (None, "calculated")
             and "start" not in v
         )
-        if not (calculated_output or v["causality"] == "calculatedParameter" or "derivative_of" in v):
+        if not (
+            calculated_output or v["causality"] == "calculatedParameter" or "derivative_of" in v
+        ):
             continue
         if v["causality"] == "calculatedParameter":
             names = parameters

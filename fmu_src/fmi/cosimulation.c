@@ -569,9 +569,12 @@ static fmu_status_t set_time_event_stop(fmu_instance_t *inst)
     return FMU_OK;
 }
 
-fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs)
+fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs, int stop_at_event, int *stopped)
 {
     const double now_abs = *fmu_time(inst);
+    if (stopped != NULL) {
+        *stopped = 0;
+    }
     if (NX == 0) {
         return finish_step(inst, t_end_abs, FMU_OK); /* no continuous states: nothing to integrate */
     }
@@ -667,7 +670,7 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs)
             inst->cvode_needs_reinit = 1;
             return FMU_ERROR;
         }
-        int restart = 0;
+        int restart = 0, mode_switched = 0;
         if (flag == CV_ROOT_RETURN) {
             if (++events > MAX_EVENTS_PER_STEP) {
                 fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR,
@@ -681,6 +684,7 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs)
             restart = fmu_event_update(inst) != 0;
             if (restart) {
                 peaks_forget(cv); /* what follows the event has a new interpolant */
+                mode_switched = 1;
             }
         } else if (flag == CV_TSTOP_RETURN) {
             restart = 1; /* a time event: the right-hand side's kink (see set_time_event_stop) */
@@ -711,6 +715,14 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs)
         if (s != FMU_OK) {
             inst->cvode_needs_reinit = 1;
             return FMU_ERROR;
+        }
+        if (stop_at_event && mode_switched) {
+            /* early return (FMI 3.0): the step ends at the event, with the event handled and the
+             * integrator restarted there; the FMU's time is the event time */
+            *stopped = 1;
+            const fmu_status_t o = fmu_update_outputs(inst, inst->step_function);
+            const fmu_status_t w = cv->warnings > warnings ? FMU_WARNING : FMU_OK;
+            return o > w ? o : w;
         }
     }
     /* CVODE warned (logged by error_handler): the step is done, with a caveat */

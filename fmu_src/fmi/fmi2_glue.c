@@ -451,7 +451,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     if (communicationStepSize == 0.0) {
         return fmi2OK;
     }
-    const fmu_status_t status = cs_do_step(inst, t_end);
+    const fmu_status_t status = cs_do_step(inst, t_end, 0, NULL);
     if (status > FMU_WARNING) {
         inst->state = FMU_STEP_FAILED;
         return ST(status);

@@ -769,11 +769,18 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     if (communicationStepSize == 0.0) {
         return fmi3OK;
     }
-    const fmu_status_t status = cs_do_step(inst, t_end);
+    int stopped = 0;
+    const fmu_status_t status = cs_do_step(inst, t_end, inst->early_return_allowed, &stopped);
     *lastSuccessfulTime = *fmu_time(inst);
     if (status > FMU_WARNING) {
         inst->state = FMU_STEP_FAILED;
         return ST(status);
+    }
+    if (stopped) {
+        /* a contact onset or release at *lastSuccessfulTime (<= t_end): the master may update
+         * its inputs there (in Event Mode when it uses it) */
+        *earlyReturn = *lastSuccessfulTime < t_end;
+        *eventHandlingNeeded = inst->event_mode_used != 0;
     }
     return ST(status > checked ? status : checked);
 }

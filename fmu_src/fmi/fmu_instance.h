@@ -260,8 +260,12 @@ static inline double *fmu_derivatives(fmu_instance_t *inst)
 /* co-simulation (cosimulation.c) */
 
 void cs_free(fmu_instance_t *inst);
-/* Integrate from the FMU's time to t_end (> the FMU's time; the caller checked the arguments). */
-fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end);
+/* Integrate from the FMU's time to t_end (> the FMU's time; the caller checked the arguments).
+ * stop_at_event: return at the first event inside the step that switches the discrete state
+ * (csfh: a contact onset or release), handled, with the FMU's time = the event time and
+ * *stopped = 1 (FMI 3.0 early return); else the step goes to t_end, however many events it
+ * holds (*stopped = 0; stopped may be NULL). */
+fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end, int stop_at_event, int *stopped);
 fmu_status_t cs_reset(fmu_instance_t *inst);
 
 #endif
