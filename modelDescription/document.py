@@ -5,7 +5,7 @@ A short summary of the model (its description, the interfaces, the states, input
 and the table of its parameters (start value, unit, range, description), all taken from the same
 single source of truth as modelDescription.xml (generate.py), so the page cannot drift from it.
 
-Usage: document.py VARIABLES_TOML OUT_HTML
+Usage: document.py [--version X.Y.Z] VARIABLES_TOML OUT_HTML
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from generate import SpecError, load, parse_range
+from generate import SpecError, load, package_version, parse_range
 
 
 def _value(v: dict[str, Any], enums: dict[str, dict[str, Any]]) -> str:
@@ -116,13 +116,15 @@ def index_html(spec: dict[str, Any]) -> str:
 
 def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--version", help="model version (default: python/csfh/_version.py)")
     ap.add_argument("variables", type=Path)
     ap.add_argument("out", type=Path)
     args = ap.parse_args(argv)
     try:
         spec = load(args.variables)
+        spec["model"]["version"] = args.version or package_version()
         text = index_html(spec)
-    except (SpecError, KeyError, tomllib.TOMLDecodeError) as exc:
+    except (SpecError, KeyError, OSError, tomllib.TOMLDecodeError) as exc:
         print(f"document.py: {args.variables}: {exc}", file=sys.stderr)
         return 1
     args.out.parent.mkdir(parents=True, exist_ok=True)
