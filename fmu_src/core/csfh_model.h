@@ -94,7 +94,7 @@ typedef struct {
     csfh_outputs_t out;
     csfh_counters_t counters;
     csfh_peaks_t peaks;
-    int cs_method;      /* solver.method (CvodeMethod): read by the co-simulation glue only */
+    int cs_method;      /* solver.method (SolverMethod): read by the co-simulation glue only */
     int cs_method_number; /* 0, or the solver.method value to set (libcosim) */
     int contact_by_gap; /* 1: the contact force acts wherever the gap is negative, also before
                          * the onset event (the paper's RK4 scheme, which has no root finding

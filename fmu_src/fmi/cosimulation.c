@@ -1,44 +1,55 @@
-/* Co-simulation: fmi2DoStep integrates the model with SUNDIALS CVODE and locates every event
- * inside the step by root finding on the model-exchange event indicators (csfh: the gap, so
- * every contact onset and release). At each root the discrete state is updated (csfh: the onset
- * indentation rate is captured) and CVODE is re-initialised; the step then continues to its end,
- * however many events it holds. The communication points do not cut CVODE's steps short: CVODE
- * may step past the end of a communication step, the FMU's state there is CVODE's interpolant
- * (to the same tolerance), and the next fmi2DoStep goes on from CVODE's internal state, so a
- * fine communication grid costs no extra integration steps.
+/* Co-simulation: fmi2DoStep integrates the model with an integrator inside the FMU (SUNDIALS
+ * CVODE, or our explicit Runge-Kutta 5(4), rk45.c) and locates every event inside the step by
+ * root finding on the model-exchange event indicators (csfh: the gap, so every contact onset and
+ * release). At each root the discrete state is updated (csfh: the onset indentation rate is
+ * captured) and the integrator is restarted; the step then continues to its end, however many
+ * events it holds. The communication points do not cut the integrator's steps short: it may step
+ * past the end of a communication step, the FMU's state there is its interpolant (to the same
+ * tolerance), and the next fmi2DoStep goes on from the integrator's internal state, so a fine
+ * communication grid costs no extra integration steps.
  *
  * Method (fmu_model.cs_method; csfh: parameter solver.method):
- *   BDF    BDF with Newton iteration, dense direct linear solver, difference-quotient Jacobian;
- *   Adams  Adams-Moulton with fixed-point iteration: no Jacobian and no linear algebra, the
- *          cheaper choice while the motion is not stiff (flight, impacts resolved in time);
- *   auto   Adams; where it struggles (more than AUTO_SUSPECT_FAILED of the steps of a window of
- *          AUTO_WINDOW steps fail, fixed-point convergence or error test), BDF is tried for
- *          two windows (start-up, then measured) and kept if its mean step is more than
- *          AUTO_BDF_COST times Adams' (a BDF step costs about that much more: Newton iteration
- *          and linear algebra), i.e. where the motion is stiff (resting or rolling contact);
- *          otherwise back to Adams, with the next trial after 1, 2, 4, ... windows. Every
- *          event restarts with Adams.
+ *   BDF    CVODE: BDF with Newton iteration, dense direct linear solver, difference-quotient
+ *          Jacobian;
+ *   Adams  CVODE: Adams-Moulton with fixed-point iteration: no Jacobian and no linear algebra;
+ *   RK45   explicit Runge-Kutta 5(4) of Dormand and Prince (rk45.c): 6 right-hand sides per step
+ *          and almost no bookkeeping, dense output and root finding on it; the cheapest choice
+ *          while the motion is not stiff (flight, impacts resolved in time);
+ *   auto   RK45; where it struggles (in a window of AUTO_WINDOW steps more than
+ *          AUTO_SUSPECT_FAILED of the steps fail, or more than AUTO_SUSPECT_STIFF of them sit at
+ *          its stability limit), BDF is tried for two windows (start-up, then measured) and kept
+ *          if its mean step is more than AUTO_BDF_COST times RK45's (a BDF step costs about that
+ *          much more), i.e. where the motion is stiff (resting or rolling contact); otherwise
+ *          back to RK45, with the next trial after 1, 2, 4, ... windows. Every event restarts
+ *          with RK45. The decision (auto_decide) is a pure function of the window's counts.
  *
  * Inputs are held constant over the communication step (zero-order hold); a changed input value,
- * a changed state or tunable parameter, and fmi2Get/SetFMUstate restart CVODE at the
- * communication point, so that the multistep history never reaches across a discontinuity of
- * the right-hand side. Tolerances: relative = the fmi2SetupExperiment tolerance
+ * a changed state or tunable parameter, and fmi2Get/SetFMUstate restart the integrator at the
+ * communication point, so that its history never reaches across a discontinuity of the
+ * right-hand side. Tolerances: relative = the fmi2SetupExperiment tolerance
  * (FMU_DEFAULT_TOLERANCE = 1e-6 when none is given), absolute = relative x the nominal value of
  * each state.
  *
- * A CVODE failure returns fmi2Error with CVODE's own message and return flag in the log; the
- * instance then holds the last state CVODE reached successfully, at that time (also reported by
- * fmi2GetRealStatus(fmi2LastSuccessfulTime)); fmi2SetFMUstate can roll it back.
+ * A failure of the integrator returns fmi2Error with its own message and return flag in the
+ * log; the instance then holds the last state it reached successfully, at that time (also
+ * reported by fmi2GetRealStatus(fmi2LastSuccessfulTime)); fmi2SetFMUstate can roll it back.
  *
- * Time: CVODE integrates in a local time tau = t - origin, measured from a time origin the
- * instance holds (the communication point where CVODE was last started from outside: first
- * step, changed input, state or parameter, FMU state taken or restored; never moved at events).
- * The integration, its step sizes and its root finding are then the same whatever the start
- * time: a run from t0 = 1e10 s reproduces the run from 0, shifted, where CVODE in the absolute
+ * Time: the integrator runs in a local time tau = t - origin, measured from a time origin the
+ * instance holds (the communication point where it was last started from outside: first step,
+ * changed input, state or parameter, FMU state taken or restored; never moved at events). The
+ * integration, its step sizes and its root finding are then the same whatever the start time: a
+ * run from t0 = 1e10 s reproduces the run from 0, shifted, where an integrator in the absolute
  * time could not resolve its steps (ulp(1e10) = 1.9e-6 s) and drifted. A communication point
  * maps to tau exactly (t_end - origin, both multiples of ulp(origin) near the origin). CVODE's
  * own warnings (e.g. "t + h = t" after a very long run) make fmi2DoStep return fmi2Warning;
  * fmi2DoStep itself (fmi2_glue.c) reports steps that the double time cannot resolve.
+ *
+ * Work per step and per communication point: the outputs are not computed at the end of a step
+ * but when they are read (fmi2GetReal, fmu_update_outputs), the event message is formatted only
+ * when logEvents is on, and the peak outputs cost nothing outside the contact mode.
+ *
+ * The integrator logic below (solver_*, auto_decide, the peak analysis) uses no FMI types; only
+ * cs_do_step, the logging and the instance are FMI-specific.
  *
  * A model without continuous states (the comb-drive actuator) just advances its time. */
 #include <float.h>
@@ -56,51 +67,81 @@
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include "fmu_instance.h"
+#include "rk45.h"
 
 #define NX fmu_model.n_states
 #define MAX_EVENTS_PER_STEP 1000000L  /* guards against an endless chain of events */
 #ifndef MAX_STEPS_PER_CALL
-#define MAX_STEPS_PER_CALL 500000L    /* CVODE steps per fmi2DoStep (the fuzz build lowers it) */
+#define MAX_STEPS_PER_CALL 500000L    /* integrator steps per fmi2DoStep (the fuzz build lowers it) */
 #endif
 #define AUTO_WINDOW 100L              /* auto: steps per decision */
-#define AUTO_SUSPECT_FAILED 0.05      /* auto: failed fraction of an Adams window that triggers a trial */
-#define AUTO_BDF_COST 1.5             /* auto: cost of a BDF step over an Adams step */
+#define AUTO_SUSPECT_FAILED 0.05      /* auto: failed fraction of a window that triggers a trial */
+#define AUTO_SUSPECT_STIFF 0.5        /* auto: fraction of RK45's steps at its stability limit
+                                         that triggers a trial */
+#define AUTO_BDF_COST 1.5             /* auto: cost of a BDF step over an RK45 step */
 #define AUTO_MAX_HOLDOFF 64           /* auto: most windows between two trials */
-#define FIRST_STEP_HORIZON 1.0        /* s: the tout of CVODE's first-step estimate (see cs_do_step) */
+#define FIRST_STEP_HORIZON 1.0        /* s: bound of the first step after a (re)start (see cs_do_step) */
+
+/* Results of solver_step. */
+enum { STEP_OK = 0, STEP_ROOT = 1, STEP_FAILED = -1 };
 
 struct csfh_cvode {
     SUNContext ctx;
+    int method;             /* the integrator running: FMU_CS_BDF, FMU_CS_ADAMS or FMU_CS_RK45 */
+    /* CVODE (BDF, Adams); its memory is kept while RK45 runs */
     void *mem;
-    N_Vector y;
+    int mem_method;         /* the method CVODE's memory was created with */
     N_Vector abstol;
     SUNMatrix J;
     SUNLinearSolver LS;
     SUNNonlinearSolver NLS; /* fixed-point iteration (Adams) */
-    int method;             /* FMU_CS_BDF or FMU_CS_ADAMS: the method CVODE was created with */
-    long window_steps;      /* auto: CVODE's step and failure counts and the time at the start */
-    long window_fails;      /*       of the current window */
-    double window_t0;
-    int trial;              /* auto: 0, or BDF on trial: 1 starting up, 2 measured */
-    int holdoff;            /* auto: Adams windows left before the next trial */
-    int next_holdoff;
-    double adams_h;         /* auto: mean Adams step of the window before the trial, s */
-    double tolerance; /* the relative tolerance the solver was set up with */
-    N_Vector y_root;  /* a root CVODE reported beyond the end of the last communication step: */
+    /* RK45 */
+    rk45_t *rk;
+    rk45_stats_t rk_start;  /* its counters at its last (re)start */
+    N_Vector y;             /* the integrator's solution at the time it returned */
+    double tolerance;       /* the relative tolerance the solver was set up with */
+    N_Vector y_root;  /* a root reported beyond the end of the last communication step: */
     double t_root;    /* the state there and its time, */
     int root_pending; /* handled in the communication step that contains it */
-    long counted_steps; /* CVODE steps already added to the model's counter */
+    long counted_steps; /* steps since the last (re)start already added to the model's counter */
+    /* auto (auto_decide) */
+    long window_steps;      /* the integrator's step, failure and stiff-step counts since its */
+    long window_fails;      /* (re)start, and the time, at the start of the current window */
+    long window_stiff;
+    double window_t0;
+    int trial;              /* 0, or BDF on trial: 1 starting up, 2 measured */
+    int holdoff;            /* non-stiff windows left before the next trial */
+    int next_holdoff;
+    double nonstiff_h;      /* mean step of the non-stiff method in the window before the trial */
     /* peak outputs (fmu_model.n_peaks > 0, track_peaks) */
     N_Vector peak_y, peak_dy; /* work vectors */
-    double peak_t;            /* the end of the last analysed CVODE step: */
+    double peak_t;            /* the end of the last analysed step: */
     int peak_slope_valid;     /* its slopes and values there are valid */
     double peak_slope[FMU_MAX_PEAKS];
     double peak_end_v[FMU_MAX_PEAKS];
     int peak_n_max;           /* the maxima inside it: times and values */
     double peak_max_t[FMU_MAX_PEAKS];
     double peak_max_v[FMU_MAX_PEAKS][FMU_MAX_PEAKS];
-    double origin;      /* s: CVODE's time 0 (see the top of this file); CVODE's times are local */
+    double origin;      /* s: the integrator's time 0 (see the top of this file); its times are local */
     long warnings;      /* CVODE warnings so far (error_handler) */
 };
+
+static const char *method_name(int method)
+{
+    switch (method) {
+    case FMU_CS_BDF:
+        return "BDF";
+    case FMU_CS_ADAMS:
+        return "Adams";
+    case FMU_CS_RK45:
+        return "RK45";
+    default:
+        return "auto";
+    }
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* the model as the integrators see it */
 
 static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
 {
@@ -111,19 +152,40 @@ static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
     return status == FMU_MODEL_NONFINITE ? 1 : 0; /* recoverable: CVODE retries a smaller step */
 }
 
+static int check_indicators(fmu_instance_t *inst, const double *gout)
+{
+    for (int i = 0; i < fmu_model.n_event_indicators; i++) {
+        if (!isfinite(gout[i])) {
+            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
+                    "fmi2DoStep: non-finite event indicator z[%d] = %g", i, gout[i]);
+            return 1; /* the integrator fails the step */
+        }
+    }
+    return 0;
+}
+
 static int roots(sunrealtype t, N_Vector y, sunrealtype *gout, void *user_data)
 {
     fmu_instance_t *inst = (fmu_instance_t *)user_data;
     (void)t;
     fmu_model.event_indicators(inst->model, N_VGetArrayPointer(y), gout);
-    for (int i = 0; i < fmu_model.n_event_indicators; i++) {
-        if (!isfinite(gout[i])) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
-                    "fmi2DoStep: non-finite event indicator z[%d] = %g", i, gout[i]);
-            return 1; /* CVODE fails the step (CV_RTFUNC_FAIL) */
-        }
-    }
-    return 0;
+    return check_indicators(inst, gout);
+}
+
+static int rk_rhs(double t, const double *y, double *ydot, void *user_data)
+{
+    fmu_instance_t *inst = (fmu_instance_t *)user_data;
+    (void)t;
+    const int status = fmu_model.derivatives(inst->model, y, ydot);
+    return status == FMU_MODEL_NONFINITE ? 1 : 0; /* recoverable: a smaller step */
+}
+
+static int rk_roots(double t, const double *y, double *gout, void *user_data)
+{
+    fmu_instance_t *inst = (fmu_instance_t *)user_data;
+    (void)t;
+    fmu_model.event_indicators(inst->model, y, gout);
+    return check_indicators(inst, gout);
 }
 
 static void error_handler(int error_code, const char *module, const char *function, char *msg,
@@ -150,6 +212,7 @@ void cs_free(fmu_instance_t *inst)
     if (cv->mem != NULL) {
         CVodeFree(&cv->mem);
     }
+    rk45_free(cv->rk);
     if (cv->LS != NULL) {
         SUNLinSolFree(cv->LS);
     }
@@ -159,20 +222,11 @@ void cs_free(fmu_instance_t *inst)
     if (cv->J != NULL) {
         SUNMatDestroy(cv->J);
     }
-    if (cv->y != NULL) {
-        N_VDestroy(cv->y);
-    }
-    if (cv->abstol != NULL) {
-        N_VDestroy(cv->abstol);
-    }
-    if (cv->y_root != NULL) {
-        N_VDestroy(cv->y_root);
-    }
-    if (cv->peak_y != NULL) {
-        N_VDestroy(cv->peak_y);
-    }
-    if (cv->peak_dy != NULL) {
-        N_VDestroy(cv->peak_dy);
+    N_Vector *vectors[] = {&cv->y, &cv->abstol, &cv->y_root, &cv->peak_y, &cv->peak_dy};
+    for (size_t i = 0; i < sizeof(vectors) / sizeof(vectors[0]); i++) {
+        if (*vectors[i] != NULL) {
+            N_VDestroy(*vectors[i]);
+        }
     }
     if (cv->ctx != NULL) {
         SUNContext_Free(&cv->ctx);
@@ -193,38 +247,112 @@ static fmi2Status cv_check(fmu_instance_t *inst, int flag, const char *call)
     return fmi2Error;
 }
 
-/* auto: a new window of steps (CVODE's counters restart with every (re)initialisation). */
-static void start_window(csfh_cvode_t *cv, double t)
+static fmi2Status rk_check(fmu_instance_t *inst, int flag, const char *call)
 {
-    cv->window_steps = 0;
-    cv->window_fails = 0;
-    cv->window_t0 = t;
+    if (flag >= 0) {
+        return fmi2OK;
+    }
+    /* RK45's own message (what failed, with its values), then the flag, as for CVODE */
+    fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "RK45 %s: %s", call,
+            inst->cvode->rk != NULL ? rk45_message(inst->cvode->rk) : "out of memory");
+    fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: %s failed with %s at t = %.17g", call,
+            rk45_flag_name(flag), *fmu_time(inst));
+    return fmi2Error;
 }
 
-/* auto: a new segment of smooth motion (start, event, restart): no trial, no hold-off. */
-static void start_segment(csfh_cvode_t *cv, double t)
+/* ------------------------------------------------------------------------------------------ */
+/* the integrator in use, behind one set of calls (times are local, see the top of this file) */
+
+/* The end of the integrator's last step. */
+static double solver_time(const csfh_cvode_t *cv)
 {
-    start_window(cv, t);
-    cv->trial = 0;
-    cv->holdoff = 0;
-    cv->next_holdoff = 1;
+    if (cv->method == FMU_CS_RK45) {
+        return rk45_current_time(cv->rk);
+    }
+    double tn = 0.0;
+    CVodeGetCurrentTime(cv->mem, &tn);
+    return tn;
 }
 
-static int configured_method(const fmu_instance_t *inst)
+/* The size of the integrator's last step. */
+static double solver_last_step(const csfh_cvode_t *cv)
 {
-    return fmu_model.cs_method != NULL ? fmu_model.cs_method(inst->model) : FMU_CS_BDF;
+    if (cv->method == FMU_CS_RK45) {
+        return rk45_last_step(cv->rk);
+    }
+    double hu = 0.0;
+    CVodeGetLastStep(cv->mem, &hu);
+    return hu;
 }
 
-/* (Re)create CVODE's memory with `method` (FMU_CS_BDF or FMU_CS_ADAMS) at the local time tau
- * and the FMU's state; the vectors, the matrix and the solvers are kept from one method to the
- * next. */
-static fmi2Status cv_create(fmu_instance_t *inst, int method, double tau)
+/* The state (k = 0) or its derivative (k = 1) at t inside the last step, from the integrator's
+ * interpolant: 0, or < 0 outside it. */
+static int solver_dense(const csfh_cvode_t *cv, double t, int k, N_Vector out)
+{
+    if (cv->method == FMU_CS_RK45) {
+        return rk45_dense(cv->rk, t, k, N_VGetArrayPointer(out));
+    }
+    return CVodeGetDky(cv->mem, t, k, out);
+}
+
+/* Steps, failed steps and steps at the stability limit (RK45) since the last (re)start. */
+static void solver_counts(const csfh_cvode_t *cv, long *steps, long *fails, long *stiff)
+{
+    if (cv->method == FMU_CS_RK45) {
+        rk45_stats_t st;
+        rk45_get_stats(cv->rk, &st);
+        *steps = st.steps - cv->rk_start.steps;
+        *fails = st.fails - cv->rk_start.fails;
+        *stiff = st.stiff - cv->rk_start.stiff;
+        return;
+    }
+    long nconv = 0, nerr = 0;
+    *steps = 0;
+    CVodeGetNumSteps(cv->mem, steps);
+    CVodeGetNumNonlinSolvConvFails(cv->mem, &nconv);
+    CVodeGetNumErrTestFails(cv->mem, &nerr);
+    *fails = nconv + nerr;
+    *stiff = 0;
+}
+
+/* The bookkeeping of a (re)start: no steps counted yet, no pending root. */
+static void solver_started(csfh_cvode_t *cv)
+{
+    cv->counted_steps = 0;
+    cv->root_pending = 0;
+    if (cv->rk != NULL) {
+        rk45_get_stats(cv->rk, &cv->rk_start);
+    }
+}
+
+/* (Re)start `method` at the local time tau from the state in cv->y. CVODE's memory is created
+ * when missing or made with the other CVODE method, else re-initialised; the vectors, the matrix
+ * and the solvers are kept from one method to the next. */
+static fmi2Status solver_start(fmu_instance_t *inst, int method, double tau)
 {
     csfh_cvode_t *cv = inst->cvode;
+    cv->method = method;
+    if (method == FMU_CS_RK45) {
+        if (cv->rk == NULL) {
+            cv->rk = rk45_create(NX, fmu_model.n_event_indicators, rk_rhs,
+                                 fmu_model.n_event_indicators > 0 ? rk_roots : NULL, inst);
+            if (cv->rk == NULL ||
+                rk45_set_tolerances(cv->rk, inst->tolerance, N_VGetArrayPointer(cv->abstol)) !=
+                    RK45_SUCCESS) {
+                return rk_check(inst, RK45_MEM_FAIL, "rk45_create");
+            }
+        }
+        solver_started(cv);
+        return rk_check(inst, rk45_init(cv->rk, tau, N_VGetArrayPointer(cv->y), FIRST_STEP_HORIZON),
+                        "rk45_init");
+    }
+    if (cv->mem != NULL && cv->mem_method == method) {
+        solver_started(cv);
+        return cv_check(inst, CVodeReInit(cv->mem, tau, cv->y), "CVodeReInit");
+    }
     if (cv->mem != NULL) {
         CVodeFree(&cv->mem);
     }
-    memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
     cv->mem = CVodeCreate(method == FMU_CS_ADAMS ? CV_ADAMS : CV_BDF, cv->ctx);
     if (method == FMU_CS_ADAMS && cv->NLS == NULL) {
         cv->NLS = SUNNonlinSol_FixedPoint(cv->y, 0, cv->ctx);
@@ -237,10 +365,8 @@ static fmi2Status cv_create(fmu_instance_t *inst, int method, double tau)
         fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate CVODE");
         return fmi2Error;
     }
-    cv->method = method;
-    cv->counted_steps = 0;
-    cv->root_pending = 0;
-    start_window(cv, tau);
+    cv->mem_method = method;
+    solver_started(cv);
     fmi2Status s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
     if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, tau, cv->y), "CVodeInit");
     if (s == fmi2OK) s = cv_check(inst, CVodeSetUserData(cv->mem, inst), "CVodeSetUserData");
@@ -252,11 +378,151 @@ static fmi2Status cv_create(fmu_instance_t *inst, int method, double tau)
     }
     if (s == fmi2OK) s = cv_check(inst, CVodeRootInit(cv->mem, fmu_model.n_event_indicators, roots), "CVodeRootInit");
     if (s == fmi2OK) s = cv_check(inst, CVodeSetNoInactiveRootWarn(cv->mem), "CVodeSetNoInactiveRootWarn");
+    if (s != fmi2OK) {
+        CVodeFree(&cv->mem); /* half set up: never reused */
+    }
     return s;
 }
 
-/* Create CVODE (first step) or re-initialise it at the current state, with the configured
- * method (auto starts with Adams); the FMU's time becomes the origin of CVODE's local time. */
+/* One internal step (or the next root inside the last one): STEP_OK, STEP_ROOT or STEP_FAILED
+ * (logged); (tret, cv->y) is the point reached, on failure the last successful one. */
+static int solver_step(fmu_instance_t *inst, double *tret)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    if (cv->method == FMU_CS_RK45) {
+        const int flag = rk45_step(cv->rk, tret, N_VGetArrayPointer(cv->y));
+        if (flag < 0) {
+            rk_check(inst, flag, "rk45_step");
+            return STEP_FAILED;
+        }
+        return flag == RK45_ROOT ? STEP_ROOT : STEP_OK;
+    }
+    /* tout only sets the size of the first step after a (re)start (CVODE's estimate is bounded
+     * by a tenth of the distance to tout): a fixed horizon, so that the step sequence does not
+     * depend on the communication grid */
+    const int flag = CVode(cv->mem, *tret + FIRST_STEP_HORIZON, cv->y, tret, CV_ONE_STEP);
+    if (flag < 0) {
+        /* CVODE's message is already in the log (error_handler); add the flag */
+        cv_check(inst, flag, "CVode");
+        return STEP_FAILED;
+    }
+    return flag == CV_ROOT_RETURN ? STEP_ROOT : STEP_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* auto */
+
+/* A new window of steps (the integrator's counters restart with every (re)start). */
+static void start_window(csfh_cvode_t *cv, double t)
+{
+    solver_counts(cv, &cv->window_steps, &cv->window_fails, &cv->window_stiff);
+    cv->window_t0 = t;
+}
+
+/* A new segment of smooth motion (start, event, restart): no trial, no hold-off. */
+static void start_segment(csfh_cvode_t *cv, double t)
+{
+    start_window(cv, t);
+    cv->trial = 0;
+    cv->holdoff = 0;
+    cv->next_holdoff = 1;
+}
+
+/* What auto knows of a finished window, and what it decides. */
+typedef struct {
+    int method;        /* the method that ran the window */
+    long steps;        /* its steps (>= AUTO_WINDOW), */
+    double failed;     /* the fraction of them that failed, */
+    double stiff;      /* the fraction at the stability limit (RK45), */
+    double mean_h;     /* and their mean size, s */
+} auto_window_t;
+
+typedef struct {
+    int trial, holdoff, next_holdoff; /* (as in csfh_cvode_t) */
+    double nonstiff_h;
+} auto_state_t;
+
+/* The method for the next window, from the one just finished (pure: no integrator, no FMI);
+ * `nonstiff` is the method auto uses while not stiff. Writes the decision, if any, to `why`
+ * (empty when nothing changes). */
+static int auto_decide(auto_state_t *a, const auto_window_t *w, int nonstiff, char *why,
+                       size_t why_size)
+{
+    why[0] = '\0';
+    if (w->method != FMU_CS_BDF) {
+        if (a->holdoff > 0) {
+            a->holdoff--;
+        } else if (w->failed > AUTO_SUSPECT_FAILED || w->stiff > AUTO_SUSPECT_STIFF) {
+            a->nonstiff_h = w->mean_h;
+            a->trial = 1;
+            snprintf(why, why_size,
+                     "auto: trying BDF (%.0f %% of %s's steps failed, %.0f %% at its stability "
+                     "limit, mean step %.3g s)",
+                     100.0 * w->failed, method_name(w->method), 100.0 * w->stiff, w->mean_h);
+            return FMU_CS_BDF;
+        }
+        return w->method;
+    }
+    if (a->trial == 1) { /* BDF's start-up window: not measured */
+        a->trial = 2;
+        return FMU_CS_BDF;
+    }
+    if (a->trial == 2) {
+        a->trial = 0;
+        if (w->mean_h > AUTO_BDF_COST * a->nonstiff_h) {
+            snprintf(why, why_size, "auto: BDF kept (stiff: mean step %.3g s, %s %.3g s)",
+                     w->mean_h, method_name(nonstiff), a->nonstiff_h);
+            return FMU_CS_BDF;
+        }
+        a->holdoff = a->next_holdoff;
+        a->next_holdoff = a->next_holdoff < AUTO_MAX_HOLDOFF ? 2 * a->next_holdoff : AUTO_MAX_HOLDOFF;
+        snprintf(why, why_size, "auto: back to %s (BDF's mean step %.3g s, %s %.3g s)",
+                 method_name(nonstiff), w->mean_h, method_name(nonstiff), a->nonstiff_h);
+        return nonstiff;
+    }
+    return FMU_CS_BDF;
+}
+
+/* auto: at the end of each window of AUTO_WINDOW steps (t: the local time), the method for the
+ * next window; writes what it decided to `why` (empty when nothing changes). */
+static int auto_choose(csfh_cvode_t *cv, double t, char *why, size_t why_size)
+{
+    why[0] = '\0';
+    long steps = 0, fails = 0, stiff = 0;
+    solver_counts(cv, &steps, &fails, &stiff);
+    auto_window_t w = {cv->method, steps - cv->window_steps, 0.0, 0.0, 0.0};
+    if (w.steps < AUTO_WINDOW) {
+        return cv->method;
+    }
+    w.failed = (double)(fails - cv->window_fails) / (double)w.steps;
+    w.stiff = (double)(stiff - cv->window_stiff) / (double)w.steps;
+    w.mean_h = (t - cv->window_t0) / (double)w.steps;
+    cv->window_steps = steps;
+    cv->window_fails = fails;
+    cv->window_stiff = stiff;
+    cv->window_t0 = t;
+    auto_state_t a = {cv->trial, cv->holdoff, cv->next_holdoff, cv->nonstiff_h};
+    char text[200];
+    const int method = auto_decide(&a, &w, FMU_CS_RK45, text, sizeof(text));
+    cv->trial = a.trial;
+    cv->holdoff = a.holdoff;
+    cv->next_holdoff = a.next_holdoff;
+    cv->nonstiff_h = a.nonstiff_h;
+    if (text[0] != '\0') {
+        snprintf(why, why_size, "t = %.17g: %s", cv->origin + t, text);
+    }
+    return method;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Create the integrator (first step) or restart it at the current state, with the configured
+ * method (auto starts with RK45); the FMU's time becomes the origin of the local time. */
+
+static int configured_method(const fmu_instance_t *inst)
+{
+    return fmu_model.cs_method != NULL ? fmu_model.cs_method(inst->model) : FMU_CS_BDF;
+}
+
 static fmi2Status cs_start(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
@@ -264,15 +530,8 @@ static fmi2Status cs_start(fmu_instance_t *inst)
         cs_free(inst);
         cv = NULL;
     }
-    const int method = configured_method(inst) == FMU_CS_BDF ? FMU_CS_BDF : FMU_CS_ADAMS;
-    if (cv != NULL && cv->mem != NULL && cv->method == method) {
-        memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
-        cv->counted_steps = 0;
-        cv->root_pending = 0;
-        cv->origin = *fmu_time(inst);
-        start_segment(cv, 0.0);
-        return cv_check(inst, CVodeReInit(cv->mem, 0.0, cv->y), "CVodeReInit");
-    }
+    const int configured = configured_method(inst);
+    const int method = configured == FMU_CS_AUTO ? FMU_CS_RK45 : configured;
     if (cv == NULL) {
         cv = (csfh_cvode_t *)calloc(1, sizeof(*cv));
         if (cv == NULL) {
@@ -290,7 +549,7 @@ static fmi2Status cs_start(fmu_instance_t *inst)
         cv->abstol = N_VNew_Serial(NX, cv->ctx);
         cv->y_root = N_VNew_Serial(NX, cv->ctx);
         if (cv->y == NULL || cv->abstol == NULL || cv->y_root == NULL) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate CVODE");
+            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate the integrator");
             cs_free(inst);
             return fmi2Error;
         }
@@ -303,107 +562,66 @@ static fmi2Status cs_start(fmu_instance_t *inst)
             }
         }
     }
+    memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
     cv->origin = *fmu_time(inst);
-    const fmi2Status s = cv_create(inst, method, 0.0);
+    const fmi2Status s = solver_start(inst, method, 0.0);
     if (s != fmi2OK) {
         cs_free(inst);
         return s;
     }
-    start_segment(inst->cvode, 0.0);
+    start_segment(cv, 0.0);
     return s;
 }
 
-/* Add the CVODE steps taken since the last call to the model's step counter. */
+/* Add the steps taken since the last call to the model's step counter. */
 static long count_steps(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
-    long nsteps = 0;
-    CVodeGetNumSteps(cv->mem, &nsteps);
+    long nsteps = 0, fails = 0, stiff = 0;
+    solver_counts(cv, &nsteps, &fails, &stiff);
     const long added = nsteps - cv->counted_steps;
     cv->counted_steps = nsteps;
-    if (fmu_model.add_integrator_steps != NULL) {
+    if (fmu_model.add_integrator_steps != NULL && added != 0) {
         fmu_model.add_integrator_steps(inst->model, added);
     }
     return added;
 }
 
-/* auto: at the end of each window of AUTO_WINDOW steps (t: CVODE's local time), the method for
- * the next window; writes what it decided to `why` (empty when nothing changes). */
-static int auto_choose(csfh_cvode_t *cv, double t, char *why, size_t why_size)
-{
-    why[0] = '\0';
-    long nsteps = 0, nconv = 0, nerr = 0;
-    CVodeGetNumSteps(cv->mem, &nsteps);
-    const long steps = nsteps - cv->window_steps;
-    if (steps < AUTO_WINDOW) {
-        return cv->method;
-    }
-    CVodeGetNumNonlinSolvConvFails(cv->mem, &nconv);
-    CVodeGetNumErrTestFails(cv->mem, &nerr);
-    const double failed = (double)(nconv + nerr - cv->window_fails) / (double)steps;
-    const double mean_h = (t - cv->window_t0) / (double)steps;
-    cv->window_steps = nsteps;
-    cv->window_fails = nconv + nerr;
-    cv->window_t0 = t;
-    if (cv->method == FMU_CS_ADAMS) {
-        if (cv->holdoff > 0) {
-            cv->holdoff--;
-        } else if (failed > AUTO_SUSPECT_FAILED) {
-            cv->adams_h = mean_h;
-            cv->trial = 1;
-            snprintf(why, why_size,
-                     "t = %.17g: auto: trying BDF (%.0f %% of Adams' steps failed, mean step %.3g s)",
-                     cv->origin + t, 100.0 * failed, mean_h);
-            return FMU_CS_BDF;
-        }
-        return FMU_CS_ADAMS;
-    }
-    if (cv->trial == 1) { /* BDF's start-up window: not measured */
-        cv->trial = 2;
-        return FMU_CS_BDF;
-    }
-    if (cv->trial == 2) {
-        cv->trial = 0;
-        if (mean_h > AUTO_BDF_COST * cv->adams_h) {
-            snprintf(why, why_size, "t = %.17g: auto: BDF kept (stiff: mean step %.3g s, Adams %.3g s)",
-                     cv->origin + t, mean_h, cv->adams_h);
-            return FMU_CS_BDF;
-        }
-        cv->holdoff = cv->next_holdoff;
-        cv->next_holdoff = cv->next_holdoff < AUTO_MAX_HOLDOFF ? 2 * cv->next_holdoff : AUTO_MAX_HOLDOFF;
-        snprintf(why, why_size, "t = %.17g: auto: back to Adams (BDF's mean step %.3g s, Adams %.3g s)",
-                 cv->origin + t, mean_h, cv->adams_h);
-        return FMU_CS_ADAMS;
-    }
-    return FMU_CS_BDF;
-}
-
 /* ------------------------------------------------------------------------------------------ */
 /* peak outputs: the largest values of the model's peak quantities over the communication step,
- * on CVODE's interpolant (the dense output of its last step). Each CVODE step is analysed once,
- * when it is taken: its end values, and every maximum inside it (the quantity's slope + at the
- * step's start, <= 0 at its end: the slope's root by regula falsi). Each part of a communication
- * step then takes the maxima that lie in it; the values at the communication points themselves
- * are the outputs there (the model's outputs take the max with the step's peaks). */
+ * on the integrator's interpolant (the dense output of its last step). Each step is analysed
+ * once, when it is taken: its end values, and every maximum inside it (the quantity's slope + at
+ * the step's start, <= 0 at its end). Each part of a communication step then takes the maxima
+ * that lie in it; the values at the communication points themselves are the outputs there (the
+ * model's outputs take the max with the step's peaks). Outside the contact mode the model has
+ * nothing to track and nothing is evaluated.
+ *
+ * A maximum inside a step is searched only if it can matter: the tangents at the bracket's ends
+ * bound it (for a function concave between them, as any is near its maximum) by the height of
+ * their intersection, and the search stops once that bound is within PEAK_RTOL x the integration
+ * tolerance of the largest value found. Each iteration takes the maximum of the cubic Hermite
+ * polynomial through the bracket's values and slopes (4th order: one or two iterations), so a
+ * wiggle of the resting contact's force costs nothing and an impact's peak a few evaluations. */
 
-#define PEAK_ITERATIONS 40 /* regula falsi (Illinois) on the slope: a few are used */
+#define PEAK_ITERATIONS 40 /* at most (a few are used) */
+#define PEAK_RTOL 1.0      /* x the integration tolerance: the accuracy of a located maximum */
 
-/* The peak quantities v at time t of CVODE's last step, and their time derivatives (a forward
+/* The peak quantities v at time t of the last step, and their time derivatives (a forward
  * difference along the interpolant's derivative) in slope; 0 when the model has nothing to
- * track there. */
-static int peak_point(fmu_instance_t *inst, double t, double *v, double *slope)
+ * track there. y_at_t: the state at t if the caller has it (else NULL: interpolated). */
+static int peak_point(fmu_instance_t *inst, double t, const double *y_at_t, double *v,
+                      double *slope)
 {
     csfh_cvode_t *cv = inst->cvode;
-    double tn = t, hu = 0.0;
-    CVodeGetCurrentTime(cv->mem, &tn);
-    CVodeGetLastStep(cv->mem, &hu);
+    const double tn = solver_time(cv), hu = solver_last_step(cv);
     t = t < tn - hu ? tn - hu : (t > tn ? tn : t); /* round-off at the step's ends */
-    if (CVodeGetDky(cv->mem, t, 0, cv->peak_y) < 0) {
+    double *py = N_VGetArrayPointer(cv->peak_y), *pd = N_VGetArrayPointer(cv->peak_dy);
+    if (y_at_t != NULL) {
+        memcpy(py, y_at_t, NX * sizeof(double));
+    } else if (solver_dense(cv, t, 0, cv->peak_y) < 0) {
         return 0;
     }
-    double *py = N_VGetArrayPointer(cv->peak_y), *pd = N_VGetArrayPointer(cv->peak_dy);
-    if (!fmu_model.peak_values(inst->model, py, v) ||
-        CVodeGetDky(cv->mem, t, 1, cv->peak_dy) < 0) {
+    if (!fmu_model.peak_values(inst->model, py, v) || solver_dense(cv, t, 1, cv->peak_dy) < 0) {
         return 0;
     }
     const double eps = 1e-7 * (fabs(hu) > 0.0 ? fabs(hu) : 1e-9);
@@ -418,65 +636,107 @@ static int peak_point(fmu_instance_t *inst, double t, double *v, double *slope)
     return 1;
 }
 
-/* Forget what is known of the last step (CVODE restarted: a new interpolant). */
+/* Forget what is known of the last step (restarted: a new interpolant). */
 static void peaks_forget(csfh_cvode_t *cv)
 {
     cv->peak_slope_valid = 0;
     cv->peak_n_max = 0;
 }
 
-/* Analyse CVODE's new step [tn - hu, tn]: its maxima and its end. */
-static void peak_step(fmu_instance_t *inst)
+/* Upper bound of a maximum between (a, va, sa) and (b, vb, sb) with sa > 0 >= sb: the height of
+ * the intersection of the two tangents, over the larger end value (0 if below). */
+static double peak_gain_bound(double a, double va, double sa, double b, double vb, double sb)
+{
+    double tx = (vb - va + sa * a - sb * b) / (sa - sb);
+    tx = tx < a ? a : (tx > b ? b : tx);
+    const double gain = va + sa * (tx - a) - (va > vb ? va : vb);
+    return gain > 0.0 ? gain : 0.0;
+}
+
+/* The maximum in (0, 1) of the cubic Hermite polynomial with slopes d0 > 0 at 0 and d1 <= 0 at
+ * 1 (slopes times the interval's length) and rise dv from 0 to 1; NaN if it has none there. */
+static double hermite_max(double dv, double d0, double d1)
+{
+    /* p'(u) = d0 + B u + A u^2 */
+    const double A = 3.0 * (d0 + d1 - 2.0 * dv), B = 2.0 * (3.0 * dv - 2.0 * d0 - d1);
+    const double C = d0;
+    double roots[2] = {NAN, NAN};
+    if (fabs(A) <= 1e-12 * (fabs(B) + fabs(C))) {
+        roots[0] = B != 0.0 ? -C / B : NAN;
+    } else {
+        const double disc = B * B - 4.0 * A * C;
+        if (disc < 0.0) {
+            return NAN;
+        }
+        const double q = -0.5 * (B + (B >= 0.0 ? sqrt(disc) : -sqrt(disc)));
+        roots[0] = q / A;
+        roots[1] = q != 0.0 ? C / q : NAN;
+    }
+    for (int i = 0; i < 2; i++) {
+        const double u = roots[i];
+        if (u > 0.0 && u < 1.0 && 2.0 * A * u + B <= 0.0) { /* p'' <= 0: a maximum */
+            return u;
+        }
+    }
+    return NAN;
+}
+
+/* Analyse the new step [tn - hu, tn] (y_end: the state at tn, or NULL): its maxima and its
+ * end. */
+static void peak_step(fmu_instance_t *inst, const double *y_end)
 {
     csfh_cvode_t *cv = inst->cvode;
-    double tn = 0.0, hu = 0.0, v1[FMU_MAX_PEAKS], s1[FMU_MAX_PEAKS], s0[FMU_MAX_PEAKS];
-    CVodeGetCurrentTime(cv->mem, &tn);
-    CVodeGetLastStep(cv->mem, &hu);
+    double v1[FMU_MAX_PEAKS], s1[FMU_MAX_PEAKS], s0[FMU_MAX_PEAKS], v0[FMU_MAX_PEAKS];
+    const double tn = solver_time(cv), hu = solver_last_step(cv);
     const double t0 = tn - hu;
     const int have_start = cv->peak_slope_valid && cv->peak_t == t0;
     cv->peak_n_max = 0;
     if (have_start) {
         memcpy(s0, cv->peak_slope, sizeof(s0));
+        memcpy(v0, cv->peak_end_v, sizeof(v0));
     }
-    if (!peak_point(inst, tn, v1, s1)) {
+    if (!peak_point(inst, tn, y_end, v1, s1)) {
         cv->peak_slope_valid = 0;
         return;
     }
-    if (have_start || peak_point(inst, t0, cv->peak_max_v[0], s0)) {
+    if (have_start || peak_point(inst, t0, NULL, v0, s0)) {
         for (int j = 0; j < fmu_model.n_peaks; j++) {
             if (!(s0[j] > 0.0 && s1[j] <= 0.0)) {
                 continue;
             }
-            /* the root of the slope: regula falsi with the Illinois modification (a few
-             * evaluations; the value is flat there, so a time 1e-7 of the step off changes it
-             * by ~1e-14 relative) */
-            double lo = t0, hi = tn, f_lo = s0[j], f_hi = s1[j], v[FMU_MAX_PEAKS], s[FMU_MAX_PEAKS];
-            int side = 0;
+            double lo = t0, hi = tn, v_lo = v0[j], v_hi = v1[j], s_lo = s0[j], s_hi = s1[j];
+            double best_t = NAN, best_v = -INFINITY, best[FMU_MAX_PEAKS];
             for (int k = 0; k < PEAK_ITERATIONS && hi - lo > 1e-7 * hu; k++) {
-                double mid = hi - f_hi * (hi - lo) / (f_hi - f_lo);
-                if (!(mid > lo && mid < hi)) {
-                    mid = 0.5 * (lo + hi);
-                }
-                if (!peak_point(inst, mid, v, s)) {
+                const double tol =
+                    PEAK_RTOL * inst->tolerance * fmax(fabs(v_lo), fabs(v_hi));
+                if (peak_gain_bound(lo, v_lo, s_lo, hi, v_hi, s_hi) <= tol) {
                     break;
                 }
-                if (s[j] > 0.0) {
-                    lo = mid, f_lo = s[j];
-                    f_hi = side == -1 ? 0.5 * f_hi : f_hi;
-                    side = -1;
-                } else {
-                    hi = mid, f_hi = s[j];
-                    f_lo = side == 1 ? 0.5 * f_lo : f_lo;
-                    side = 1;
+                const double L = hi - lo;
+                double u = hermite_max(v_hi - v_lo, L * s_lo, L * s_hi);
+                if (!(u > 0.0 && u < 1.0)) {
+                    u = s_lo / (s_lo - s_hi); /* secant on the slope */
                 }
-                if (s[j] == 0.0) {
-                    lo = hi = mid;
+                u = u < 0.01 ? 0.01 : (u > 0.99 ? 0.99 : u); /* the bracket must shrink */
+                const double mid = lo + u * L;
+                double v[FMU_MAX_PEAKS], s[FMU_MAX_PEAKS];
+                if (!peak_point(inst, mid, NULL, v, s)) {
+                    break;
+                }
+                if (v[j] > best_v) {
+                    best_v = v[j], best_t = mid;
+                    memcpy(best, v, sizeof(best));
+                }
+                if (s[j] > 0.0) {
+                    lo = mid, v_lo = v[j], s_lo = s[j];
+                } else {
+                    hi = mid, v_hi = v[j], s_hi = s[j];
                 }
             }
-            const int m = cv->peak_n_max;
-            if (peak_point(inst, 0.5 * (lo + hi), cv->peak_max_v[m], s)) {
-                cv->peak_max_t[m] = 0.5 * (lo + hi);
-                cv->peak_n_max++;
+            if (best_v > v0[j] && best_v > v1[j]) { /* inside the step, above its ends */
+                const int m = cv->peak_n_max++;
+                cv->peak_max_t[m] = best_t;
+                memcpy(cv->peak_max_v[m], best, sizeof(best));
             }
         }
     }
@@ -486,8 +746,9 @@ static void peak_step(fmu_instance_t *inst)
     cv->peak_slope_valid = 1;
 }
 
-/* The part [ta, tb] of the communication step, the state at tb in cv->y; `stepped`: CVODE took
- * a new step to get there. */
+/* The part [ta, tb] of the communication step, the state at tb in cv->y; `stepped`: the
+ * integrator took a new step to get there (tb is its end unless a root or the communication
+ * point came first). */
 static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
 {
     csfh_cvode_t *cv = inst->cvode;
@@ -502,7 +763,8 @@ static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
         }
     }
     if (stepped) {
-        peak_step(inst);
+        const double tn = solver_time(cv);
+        peak_step(inst, tb == tn ? N_VGetArrayPointer(cv->y) : NULL);
         if (cv->peak_slope_valid && tb == cv->peak_t) {
             fmu_model.peaks_add(inst->model, cv->peak_end_v);
         }
@@ -514,7 +776,7 @@ static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
     }
 }
 
-/* Take CVODE's solution (local time tret, y) as the model's time and state. */
+/* Take the integrator's solution (local time tret, cv->y) as the model's time and state. */
 static void take_solution(fmu_instance_t *inst, double tret)
 {
     memcpy(fmu_states(inst), N_VGetArrayPointer(inst->cvode->y), NX * sizeof(double));
@@ -522,14 +784,14 @@ static void take_solution(fmu_instance_t *inst, double tret)
     fmu_invalidate(inst);
 }
 
-/* The step ends at t_end: evaluate the outputs once (a model warning is logged once, a
- * non-finite output is an error). */
+/* The step ends at t_end. The outputs are left to be computed when they are read
+ * (fmu_update_outputs: fmi2GetReal, or the next step's peaks), so that a master that reads only
+ * states pays nothing for them. */
 static fmi2Status finish_step(fmu_instance_t *inst, double t_end, fmi2Status status)
 {
     *fmu_time(inst) = t_end; /* exact communication point (tret == t_end up to round-off) */
     fmu_invalidate(inst);
-    const fmi2Status s = fmu_update_outputs(inst, "fmi2DoStep");
-    return s > status ? s : status;
+    return status;
 }
 
 fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
@@ -547,7 +809,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
     }
     csfh_cvode_t *cv = inst->cvode;
     const long warnings = cv->warnings;
-    /* CVODE's local times (see the top of this file) */
+    /* the integrator's local times (see the top of this file) */
     const double now = now_abs - cv->origin;
     const double t_end = t_end_abs - cv->origin;
     const int automatic = configured_method(inst) == FMU_CS_AUTO;
@@ -559,45 +821,44 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
     while (tret < t_end) {
         /* One internal step per call: the solution is taken at every step, and auto can check
          * the stiffness without waiting for the end of the communication step. No stop time:
-         * the communication points do not cut CVODE's steps short. A step that ends beyond
-         * t_end is not repeated: the state at t_end comes from CVODE's interpolant (for this
-         * and for later communication points the step covers), and a root CVODE reports beyond
-         * t_end is kept pending until the communication step that contains it. */
+         * the communication points do not cut the integrator's steps short. A step that ends
+         * beyond t_end is not repeated: the state at t_end comes from the interpolant (for this
+         * and for later communication points the step covers), and a root reported beyond t_end
+         * is kept pending until the communication step that contains it. */
         int flag, stepped = 0;
         const double tret_before = tret;
-        double tn = tret;
-        CVodeGetCurrentTime(cv->mem, &tn);
         if (cv->root_pending && cv->t_root <= t_end) {
             memcpy(N_VGetArrayPointer(cv->y), N_VGetArrayPointer(cv->y_root), NX * sizeof(double));
             tret = cv->t_root;
             cv->root_pending = 0;
-            flag = CV_ROOT_RETURN;
-        } else if (cv->root_pending || tn >= t_end) {
-            /* CVODE's last step (and the root check) already reaches past t_end */
-            flag = CVodeGetDky(cv->mem, t_end, 0, cv->y);
+            flag = STEP_ROOT;
+        } else if (cv->root_pending || solver_time(cv) >= t_end) {
+            /* the last step (and the root check) already reaches past t_end */
+            flag = solver_dense(cv, t_end, 0, cv->y) < 0 ? STEP_FAILED : STEP_OK;
+            if (flag == STEP_FAILED) {
+                fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
+                        "fmi2DoStep: the interpolant of %s does not reach t = %.17g",
+                        method_name(cv->method), t_end_abs);
+            }
             tret = t_end;
         } else {
-            /* tout only sets the size of the first step after a (re)start (CVODE's estimate is
-             * bounded by a tenth of the distance to tout): a fixed horizon, so that the step
-             * sequence does not depend on the communication grid */
-            flag = CVode(cv->mem, tret + FIRST_STEP_HORIZON, cv->y, &tret, CV_ONE_STEP);
-            stepped = flag >= 0;
-            if (flag >= 0 && tret > t_end) {
-                if (flag == CV_ROOT_RETURN) {
+            flag = solver_step(inst, &tret);
+            stepped = flag != STEP_FAILED;
+            if (flag != STEP_FAILED && tret > t_end) {
+                if (flag == STEP_ROOT) {
                     memcpy(N_VGetArrayPointer(cv->y_root), N_VGetArrayPointer(cv->y), NX * sizeof(double));
                     cv->t_root = tret;
                     cv->root_pending = 1;
                 }
-                flag = CVodeGetDky(cv->mem, t_end, 0, cv->y);
+                flag = solver_dense(cv, t_end, 0, cv->y) < 0 ? STEP_FAILED : STEP_OK;
                 tret = t_end;
             }
         }
         steps += count_steps(inst);
-        if (flag < 0) {
-            /* CVODE's message is already in the log (error_handler); add the flag. CVODE returns
-             * the last successful point in (tret, y): keep it, so that what the master reads is
-             * consistent (time, state, discrete state), never a half-taken step. */
-            cv_check(inst, flag, "CVode");
+        if (flag == STEP_FAILED) {
+            /* the integrator's message and flag are in the log; it returns the last successful
+             * point in (tret, y): keep it, so that what the master reads is consistent (time,
+             * state, discrete state), never a half-taken step */
             const double *y = N_VGetArrayPointer(cv->y);
             int finite = isfinite(tret) && tret >= now && tret <= t_end;
             for (int i = 0; i < NX; i++) {
@@ -615,19 +876,20 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
         }
         track_peaks(inst, tret_before, tret, stepped);
         take_solution(inst, tret);
-        if (flag != CV_ROOT_RETURN && tret >= t_end) {
+        if (flag != STEP_ROOT && tret >= t_end) {
             break;
         }
         if (steps > MAX_STEPS_PER_CALL) {
             fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
-                    "fmi2DoStep: more than %ld CVODE steps in the step from t = %.17g to %.17g; "
+                    "fmi2DoStep: more than %ld %s steps in the step from t = %.17g to %.17g; "
                     "the FMU holds the state at t = %.17g",
-                    MAX_STEPS_PER_CALL, now_abs, t_end_abs, *fmu_time(inst));
+                    MAX_STEPS_PER_CALL, method_name(cv->method), now_abs, t_end_abs,
+                    *fmu_time(inst));
             inst->cvode_needs_reinit = 1;
             return fmi2Error;
         }
         int restart = 0;
-        if (flag == CV_ROOT_RETURN) {
+        if (flag == STEP_ROOT) {
             if (++events > MAX_EVENTS_PER_STEP) {
                 fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
                         "fmi2DoStep: more than %ld events in one step at t = %.17g",
@@ -635,24 +897,19 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
                 inst->cvode_needs_reinit = 1;
                 return fmi2Error;
             }
-            /* the discrete state changed: restart the integrator at the event (auto: with
-             * Adams again) */
+            /* the discrete state changed: restart the integrator at the event (auto: with the
+             * non-stiff method again) */
             restart = fmu_event_update(inst) != 0;
             if (restart) {
                 peaks_forget(cv); /* what follows the event has a new interpolant */
             }
         }
         fmi2Status s = fmi2OK;
-        if (restart && automatic && cv->method != FMU_CS_ADAMS) {
-            s = cv_create(inst, FMU_CS_ADAMS, tret);
+        if (restart) {
+            s = solver_start(inst, automatic ? FMU_CS_RK45 : cv->method, tret);
             start_segment(cv, tret);
-        } else if (restart) {
-            cv->counted_steps = 0;
-            cv->root_pending = 0;
-            start_segment(cv, tret);
-            s = cv_check(inst, CVodeReInit(cv->mem, tret, cv->y), "CVodeReInit");
         } else if (automatic) {
-            char why[160];
+            char why[256];
             const int method = auto_choose(cv, tret, why, sizeof(why));
             if (why[0] != '\0') {
                 fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", why);
@@ -660,7 +917,10 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             if (method == cv->method) {
                 continue;
             }
-            s = cv_create(inst, method, tret);
+            /* a new method from the current point (cv->y at tret is the step's end) */
+            s = solver_start(inst, method, tret);
+            start_window(cv, tret);
+            peaks_forget(cv);
         } else {
             continue;
         }

@@ -51,12 +51,15 @@ static int event_update(void *mv, char *msg, size_t msg_size)
 {
     csfh_model_t *m = (csfh_model_t *)mv;
     const int change = csfh_model_event_update(m);
+    if (msg_size == 0) {
+        return change; /* not logged: nothing to format */
+    }
     if (change == 1) {
         snprintf(msg, msg_size, "t = %.17g: contact %d starts, onset indentation rate %g m/s",
                  m->time, m->z.contact_count, m->z.onset_speed);
     } else if (change == 2) {
         snprintf(msg, msg_size, "t = %.17g: contact ends", m->time);
-    } else if (msg_size > 0) {
+    } else {
         msg[0] = '\0';
     }
     return change;
@@ -89,10 +92,12 @@ static int outputs(void *mv, char *msg, size_t msg_size)
 static int cs_method(const void *mv)
 {
     switch (((const csfh_model_t *)mv)->cs_method) {
-    case CSFH_CVODEMETHOD_BDF:
+    case CSFH_SOLVERMETHOD_BDF:
         return FMU_CS_BDF;
-    case CSFH_CVODEMETHOD_ADAMS:
+    case CSFH_SOLVERMETHOD_ADAMS:
         return FMU_CS_ADAMS;
+    case CSFH_SOLVERMETHOD_RK45:
+        return FMU_CS_RK45;
     default:
         return FMU_CS_AUTO;
     }

@@ -213,10 +213,13 @@ int fmu_event_update(fmu_instance_t *inst)
     if (fmu_model.n_event_indicators == 0) {
         return 0;
     }
+    /* the message is formatted only when it will be logged (an event costs far less than its
+     * 17-digit message) */
+    const int logged = inst->logger != NULL && (inst->log_categories & LOG_EVENTS) != 0;
     char msg[MSG_SIZE];
     msg[0] = '\0';
-    const int change = fmu_model.event_update(inst->model, msg, sizeof(msg));
-    if (msg[0] != '\0') {
+    const int change = fmu_model.event_update(inst->model, msg, logged ? sizeof(msg) : 0);
+    if (logged && msg[0] != '\0') {
         fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", msg);
     }
     if (change != 0) {
