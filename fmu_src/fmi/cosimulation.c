@@ -81,9 +81,26 @@
 #define AUTO_BDF_COST 1.5             /* auto: cost of a BDF step over an RK45 step */
 #define AUTO_MAX_HOLDOFF 64           /* auto: most windows between two trials */
 #define FIRST_STEP_HORIZON 1.0        /* s: bound of the first step after a (re)start (see cs_do_step) */
+#define FMU_EVENT_KINDS 8             /* RK45's first-step memory: event_update codes 1..7 */
 
 /* Results of solver_step. */
 enum { STEP_OK = 0, STEP_ROOT = 1, STEP_FAILED = -1 };
+
+#define PEAK_LOG_MAX 64   /* RK45 steps kept for the peaks before they are analysed anyway */
+#define PEAK_SNAPSHOTS 8  /* discrete states kept for them (events in one communication step) */
+
+/* One RK45 step kept for the peak outputs (see the peak section). */
+typedef struct {
+    double t0, tn;     /* the step */
+    double t_cut;      /* where it stops counting: tn, or the event that cut it short */
+    int snapshot;      /* the model's discrete state it ran with: snap[snapshot] */
+    int start_done, end_done, analysed;
+    int start_valid, end_valid; /* the quantities are tracked there, values and slopes: */
+    double v0[FMU_MAX_PEAKS], s0[FMU_MAX_PEAKS], v1[FMU_MAX_PEAKS], s1[FMU_MAX_PEAKS];
+    int n_max;         /* the maxima inside it: times and values */
+    double max_t[FMU_MAX_PEAKS];
+    double max_v[FMU_MAX_PEAKS][FMU_MAX_PEAKS];
+} peak_record_t;
 
 struct csfh_cvode {
     SUNContext ctx;
@@ -98,6 +115,12 @@ struct csfh_cvode {
     /* RK45 */
     rk45_t *rk;
     rk45_stats_t rk_start;  /* its counters at its last (re)start */
+    /* the first step after an event of each kind (the model's event_update code): what the
+     * step-size control proposed after the first step that followed the last such event, 0 if
+     * none since the last restart from outside; hint_code: the kind of the last event, until its
+     * segment's first step is taken */
+    double event_h[FMU_EVENT_KINDS];
+    int hint_code;
     N_Vector y;             /* the integrator's solution at the time it returned */
     double tolerance;       /* the relative tolerance the solver was set up with */
     N_Vector y_root;  /* a root reported beyond the end of the last communication step: */
@@ -113,7 +136,7 @@ struct csfh_cvode {
     int holdoff;            /* non-stiff windows left before the next trial */
     int next_holdoff;
     double nonstiff_h;      /* mean step of the non-stiff method in the window before the trial */
-    /* peak outputs (fmu_model.n_peaks > 0, track_peaks) */
+    /* peak outputs (fmu_model.n_peaks > 0, track_peaks): CVODE's steps, analysed when taken */
     N_Vector peak_y, peak_dy; /* work vectors */
     double peak_t;            /* the end of the last analysed step: */
     int peak_slope_valid;     /* its slopes and values there are valid */
@@ -122,6 +145,15 @@ struct csfh_cvode {
     int peak_n_max;           /* the maxima inside it: times and values */
     double peak_max_t[FMU_MAX_PEAKS];
     double peak_max_v[FMU_MAX_PEAKS][FMU_MAX_PEAKS];
+    /* ... RK45's steps, kept and analysed when the peaks are read (peak_log_*) */
+    double comm_start;        /* the communication step being taken: (comm_start, FMU time] */
+    peak_record_t *log;       /* the steps that may still hold peaks of it, in order */
+    double *log_data;         /* their RK45 records (RK45_RECORD_SIZE(NX) each) */
+    int log_n;
+    unsigned char *snap;      /* copies of the model, for the discrete state each step ran with */
+    int snap_n;
+    int snap_stale;           /* the discrete state changed since the last copy */
+    void *scratch;            /* the model's own discrete state while analysing */
     double origin;      /* s: the integrator's time 0 (see the top of this file); its times are local */
     long warnings;      /* CVODE warnings so far (error_handler) */
 };
@@ -222,6 +254,10 @@ void cs_free(fmu_instance_t *inst)
     if (cv->J != NULL) {
         SUNMatDestroy(cv->J);
     }
+    free(cv->log);
+    free(cv->log_data);
+    free(cv->snap);
+    free(cv->scratch);
     N_Vector *vectors[] = {&cv->y, &cv->abstol, &cv->y_root, &cv->peak_y, &cv->peak_dy};
     for (size_t i = 0; i < sizeof(vectors) / sizeof(vectors[0]); i++) {
         if (*vectors[i] != NULL) {
@@ -325,10 +361,11 @@ static void solver_started(csfh_cvode_t *cv)
     }
 }
 
-/* (Re)start `method` at the local time tau from the state in cv->y. CVODE's memory is created
- * when missing or made with the other CVODE method, else re-initialised; the vectors, the matrix
- * and the solvers are kept from one method to the next. */
-static fmi2Status solver_start(fmu_instance_t *inst, int method, double tau)
+/* (Re)start `method` at the local time tau from the state in cv->y; RK45 starts with the step
+ * h_first if > 0 (else its estimate). CVODE's memory is created when missing or made with the
+ * other CVODE method, else re-initialised; the vectors, the matrix and the solvers are kept from
+ * one method to the next. */
+static fmi2Status solver_start(fmu_instance_t *inst, int method, double tau, double h_first)
 {
     csfh_cvode_t *cv = inst->cvode;
     cv->method = method;
@@ -343,7 +380,9 @@ static fmi2Status solver_start(fmu_instance_t *inst, int method, double tau)
             }
         }
         solver_started(cv);
-        return rk_check(inst, rk45_init(cv->rk, tau, N_VGetArrayPointer(cv->y), FIRST_STEP_HORIZON),
+        return rk_check(inst,
+                        rk45_init(cv->rk, tau, N_VGetArrayPointer(cv->y), FIRST_STEP_HORIZON,
+                                  h_first),
                         "rk45_init");
     }
     if (cv->mem != NULL && cv->mem_method == method) {
@@ -564,7 +603,9 @@ static fmi2Status cs_start(fmu_instance_t *inst)
     }
     memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
     cv->origin = *fmu_time(inst);
-    const fmi2Status s = solver_start(inst, method, 0.0);
+    memset(cv->event_h, 0, sizeof(cv->event_h)); /* a start from outside: no memory of events */
+    cv->hint_code = 0;
+    const fmi2Status s = solver_start(inst, method, 0.0, 0.0);
     if (s != fmi2OK) {
         cs_free(inst);
         return s;
@@ -589,12 +630,23 @@ static long count_steps(fmu_instance_t *inst)
 
 /* ------------------------------------------------------------------------------------------ */
 /* peak outputs: the largest values of the model's peak quantities over the communication step,
- * on the integrator's interpolant (the dense output of its last step). Each step is analysed
- * once, when it is taken: its end values, and every maximum inside it (the quantity's slope + at
- * the step's start, <= 0 at its end). Each part of a communication step then takes the maxima
- * that lie in it; the values at the communication points themselves are the outputs there (the
- * model's outputs take the max with the step's peaks). Outside the contact mode the model has
- * nothing to track and nothing is evaluated.
+ * on the integrator's interpolant (the dense output of each step). Every step is analysed once:
+ * its end values, and every maximum inside it (the quantity's slope + at the step's start, <= 0
+ * at its end). Each communication step then takes the maxima that lie in it and the end values
+ * of the steps that end in it; the values at the communication points themselves are the
+ * outputs there (the model's outputs take the max with the step's peaks). Outside the contact
+ * mode the model has nothing to track and nothing is evaluated.
+ *
+ * When: CVODE's steps are analysed when taken (its interpolant is gone after the next step).
+ * RK45's steps are kept (their dense output, the states and f at their ends: rk45_save_step)
+ * with the discrete state they ran with, and analysed only when the peaks are needed: when an
+ * output is read (fmu_update_outputs), an FMU state is taken or a value set (cs_peaks_flush), or
+ * PEAK_LOG_MAX steps or PEAK_SNAPSHOTS events have piled up. A master that reads no output of a
+ * communication step does not pay for its peaks. The result does not depend on when (or
+ * whether) the analysis runs: the values and slopes at a step's ends are functions of the state
+ * and f there (the slope a forward difference along f, which the adjacent steps share exactly),
+ * computed by the step that ends there and taken over by the next (the step kept before the
+ * first one still needed is kept for that).
  *
  * A maximum inside a step is searched only if it can matter: the tangents at the bracket's ends
  * bound it (for a function concave between them, as any is near its maximum) by the height of
@@ -606,25 +658,49 @@ static long count_steps(fmu_instance_t *inst)
 #define PEAK_ITERATIONS 40 /* at most (a few are used) */
 #define PEAK_RTOL 1.0      /* x the integration tolerance: the accuracy of a located maximum */
 
-/* The peak quantities v at time t of the last step, and their time derivatives (a forward
- * difference along the interpolant's derivative) in slope; 0 when the model has nothing to
- * track there. y_at_t: the state at t if the caller has it (else NULL: interpolated). */
-static int peak_point(fmu_instance_t *inst, double t, const double *y_at_t, double *v,
-                      double *slope)
+/* Where a step's states come from: the live integrator (CVODE, record NULL) or a kept RK45
+ * step. */
+typedef struct {
+    const double *record;
+    double t0, tn, h;
+} peak_source_t;
+
+static int peak_work_vectors(csfh_cvode_t *cv)
+{
+    if (cv->peak_y == NULL) {
+        cv->peak_y = N_VClone(cv->y);
+        cv->peak_dy = N_VClone(cv->y);
+    }
+    return cv->peak_y != NULL && cv->peak_dy != NULL;
+}
+
+/* The peak quantities v at time t of the step, and their time derivatives in slope (a forward
+ * difference along the derivative of the state); 0 when the model has nothing to track there.
+ * y_at_t, f_at_t: the state and its derivative at t if known (else NULL: interpolated). */
+static int peak_point(fmu_instance_t *inst, const peak_source_t *src, double t,
+                      const double *y_at_t, const double *f_at_t, double *v, double *slope)
 {
     csfh_cvode_t *cv = inst->cvode;
-    const double tn = solver_time(cv), hu = solver_last_step(cv);
-    t = t < tn - hu ? tn - hu : (t > tn ? tn : t); /* round-off at the step's ends */
+    t = t < src->t0 ? src->t0 : (t > src->tn ? src->tn : t); /* round-off at the step's ends */
     double *py = N_VGetArrayPointer(cv->peak_y), *pd = N_VGetArrayPointer(cv->peak_dy);
     if (y_at_t != NULL) {
         memcpy(py, y_at_t, NX * sizeof(double));
+    } else if (src->record != NULL) {
+        rk45_record_dense(src->record, NX, t, 0, py);
     } else if (solver_dense(cv, t, 0, cv->peak_y) < 0) {
         return 0;
     }
-    if (!fmu_model.peak_values(inst->model, py, v) || solver_dense(cv, t, 1, cv->peak_dy) < 0) {
+    if (!fmu_model.peak_values(inst->model, py, v)) {
         return 0;
     }
-    const double eps = 1e-7 * (fabs(hu) > 0.0 ? fabs(hu) : 1e-9);
+    if (f_at_t != NULL) {
+        memcpy(pd, f_at_t, NX * sizeof(double));
+    } else if (src->record != NULL) {
+        rk45_record_dense(src->record, NX, t, 1, pd);
+    } else if (solver_dense(cv, t, 1, cv->peak_dy) < 0) {
+        return 0;
+    }
+    const double eps = 1e-7 * (fabs(src->h) > 0.0 ? fabs(src->h) : 1e-9);
     for (int i = 0; i < NX; i++) {
         pd[i] = py[i] + eps * pd[i];
     }
@@ -636,7 +712,7 @@ static int peak_point(fmu_instance_t *inst, double t, const double *y_at_t, doub
     return 1;
 }
 
-/* Forget what is known of the last step (restarted: a new interpolant). */
+/* Forget what is known of CVODE's last step (restarted: a new interpolant). */
 static void peaks_forget(csfh_cvode_t *cv)
 {
     cv->peak_slope_valid = 0;
@@ -681,69 +757,289 @@ static double hermite_max(double dv, double d0, double d1)
     return NAN;
 }
 
-/* Analyse the new step [tn - hu, tn] (y_end: the state at tn, or NULL): its maxima and its
+/* The maxima inside a step with values and slopes v0, s0 at its start and v1, s1 at its end:
+ * their times and the quantities there; returns how many. */
+static int peak_maxima(fmu_instance_t *inst, const peak_source_t *src, const double *v0,
+                       const double *s0, const double *v1, const double *s1, double *max_t,
+                       double (*max_v)[FMU_MAX_PEAKS])
+{
+    int n_max = 0;
+    for (int j = 0; j < fmu_model.n_peaks; j++) {
+        if (!(s0[j] > 0.0 && s1[j] <= 0.0)) {
+            continue;
+        }
+        double lo = src->t0, hi = src->tn, v_lo = v0[j], v_hi = v1[j], s_lo = s0[j], s_hi = s1[j];
+        double best_t = NAN, best_v = -INFINITY, best[FMU_MAX_PEAKS];
+        for (int k = 0; k < PEAK_ITERATIONS && hi - lo > 1e-7 * src->h; k++) {
+            const double tol = PEAK_RTOL * inst->tolerance * fmax(fabs(v_lo), fabs(v_hi));
+            if (peak_gain_bound(lo, v_lo, s_lo, hi, v_hi, s_hi) <= tol) {
+                break;
+            }
+            const double L = hi - lo;
+            double u = hermite_max(v_hi - v_lo, L * s_lo, L * s_hi);
+            if (!(u > 0.0 && u < 1.0)) {
+                u = s_lo / (s_lo - s_hi); /* secant on the slope */
+            }
+            u = u < 0.01 ? 0.01 : (u > 0.99 ? 0.99 : u); /* the bracket must shrink */
+            const double mid = lo + u * L;
+            double v[FMU_MAX_PEAKS], s[FMU_MAX_PEAKS];
+            if (!peak_point(inst, src, mid, NULL, NULL, v, s)) {
+                break;
+            }
+            if (v[j] > best_v) {
+                best_v = v[j], best_t = mid;
+                memcpy(best, v, sizeof(best));
+            }
+            if (s[j] > 0.0) {
+                lo = mid, v_lo = v[j], s_lo = s[j];
+            } else {
+                hi = mid, v_hi = v[j], s_hi = s[j];
+            }
+        }
+        if (best_v > v0[j] && best_v > v1[j]) { /* inside the step, above its ends */
+            max_t[n_max] = best_t;
+            memcpy(max_v[n_max], best, sizeof(best));
+            n_max++;
+        }
+    }
+    return n_max;
+}
+
+/* Analyse CVODE's new step [tn - hu, tn] (y_end: the state at tn, or NULL): its maxima and its
  * end. */
 static void peak_step(fmu_instance_t *inst, const double *y_end)
 {
     csfh_cvode_t *cv = inst->cvode;
     double v1[FMU_MAX_PEAKS], s1[FMU_MAX_PEAKS], s0[FMU_MAX_PEAKS], v0[FMU_MAX_PEAKS];
     const double tn = solver_time(cv), hu = solver_last_step(cv);
-    const double t0 = tn - hu;
-    const int have_start = cv->peak_slope_valid && cv->peak_t == t0;
+    const peak_source_t src = {NULL, tn - hu, tn, hu};
+    const int have_start = cv->peak_slope_valid && cv->peak_t == src.t0;
     cv->peak_n_max = 0;
     if (have_start) {
         memcpy(s0, cv->peak_slope, sizeof(s0));
         memcpy(v0, cv->peak_end_v, sizeof(v0));
     }
-    if (!peak_point(inst, tn, y_end, v1, s1)) {
+    if (!peak_point(inst, &src, tn, y_end, NULL, v1, s1)) {
         cv->peak_slope_valid = 0;
         return;
     }
-    if (have_start || peak_point(inst, t0, NULL, v0, s0)) {
-        for (int j = 0; j < fmu_model.n_peaks; j++) {
-            if (!(s0[j] > 0.0 && s1[j] <= 0.0)) {
-                continue;
-            }
-            double lo = t0, hi = tn, v_lo = v0[j], v_hi = v1[j], s_lo = s0[j], s_hi = s1[j];
-            double best_t = NAN, best_v = -INFINITY, best[FMU_MAX_PEAKS];
-            for (int k = 0; k < PEAK_ITERATIONS && hi - lo > 1e-7 * hu; k++) {
-                const double tol =
-                    PEAK_RTOL * inst->tolerance * fmax(fabs(v_lo), fabs(v_hi));
-                if (peak_gain_bound(lo, v_lo, s_lo, hi, v_hi, s_hi) <= tol) {
-                    break;
-                }
-                const double L = hi - lo;
-                double u = hermite_max(v_hi - v_lo, L * s_lo, L * s_hi);
-                if (!(u > 0.0 && u < 1.0)) {
-                    u = s_lo / (s_lo - s_hi); /* secant on the slope */
-                }
-                u = u < 0.01 ? 0.01 : (u > 0.99 ? 0.99 : u); /* the bracket must shrink */
-                const double mid = lo + u * L;
-                double v[FMU_MAX_PEAKS], s[FMU_MAX_PEAKS];
-                if (!peak_point(inst, mid, NULL, v, s)) {
-                    break;
-                }
-                if (v[j] > best_v) {
-                    best_v = v[j], best_t = mid;
-                    memcpy(best, v, sizeof(best));
-                }
-                if (s[j] > 0.0) {
-                    lo = mid, v_lo = v[j], s_lo = s[j];
-                } else {
-                    hi = mid, v_hi = v[j], s_hi = s[j];
-                }
-            }
-            if (best_v > v0[j] && best_v > v1[j]) { /* inside the step, above its ends */
-                const int m = cv->peak_n_max++;
-                cv->peak_max_t[m] = best_t;
-                memcpy(cv->peak_max_v[m], best, sizeof(best));
-            }
-        }
+    if (have_start || peak_point(inst, &src, src.t0, NULL, NULL, v0, s0)) {
+        cv->peak_n_max = peak_maxima(inst, &src, v0, s0, v1, s1, cv->peak_max_t, cv->peak_max_v);
     }
     memcpy(cv->peak_slope, s1, sizeof(s1));
     memcpy(cv->peak_end_v, v1, sizeof(v1));
     cv->peak_t = tn;
     cv->peak_slope_valid = 1;
+}
+
+/* --- RK45's steps, kept and analysed when needed ------------------------------------------ */
+
+static double *log_record(csfh_cvode_t *cv, int k)
+{
+    return cv->log_data + (size_t)k * RK45_RECORD_SIZE(NX);
+}
+
+/* Forget the kept steps (a restart from outside: the next ones start afresh). */
+static void peak_log_clear(csfh_cvode_t *cv)
+{
+    cv->log_n = 0;
+    cv->snap_n = 0;
+    cv->snap_stale = 1;
+}
+
+/* Put the model into the discrete state kept step k ran with (set), or back into its own. */
+static void with_step_state(fmu_instance_t *inst, int k, int set)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    if (set) {
+        memcpy(cv->scratch, inst->model, fmu_model.size);
+        fmu_model.peaks_state(inst->model, cv->snap + (size_t)cv->log[k].snapshot * fmu_model.size);
+    } else {
+        fmu_model.peaks_state(inst->model, cv->scratch);
+    }
+}
+
+/* The values and slopes at the end (end = 1) or start (0) of kept step k (the model in its
+ * discrete state). */
+static void log_point(fmu_instance_t *inst, int k, int end)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    peak_record_t *r = &cv->log[k];
+    const double *rec = log_record(cv, k);
+    const peak_source_t src = {rec, r->t0, r->tn, r->tn - r->t0};
+    if (end) {
+        r->end_valid = peak_point(inst, &src, r->tn, rk45_record_y(rec, NX, 1),
+                                  rk45_record_f(rec, NX, 1), r->v1, r->s1);
+        r->end_done = 1;
+    } else {
+        r->start_valid = peak_point(inst, &src, r->t0, rk45_record_y(rec, NX, 0),
+                                    rk45_record_f(rec, NX, 0), r->v0, r->s0);
+        r->start_done = 1;
+    }
+}
+
+/* Analyse kept step k: its ends (the start is the previous step's end when that one is kept,
+ * ends where this one starts and ran in the same discrete state) and its maxima. */
+static void log_analyse(fmu_instance_t *inst, int k)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    peak_record_t *r = &cv->log[k];
+    if (r->analysed) {
+        return;
+    }
+    peak_record_t *p = k > 0 ? &cv->log[k - 1] : NULL;
+    const int chained =
+        p != NULL && p->tn == r->t0 && p->t_cut == p->tn && p->snapshot == r->snapshot;
+    with_step_state(inst, k, 1);
+    if (chained) {
+        if (!p->end_done) {
+            log_point(inst, k - 1, 1); /* (the same discrete state) */
+        }
+        r->start_valid = p->end_valid;
+        memcpy(r->v0, p->v1, sizeof(r->v0));
+        memcpy(r->s0, p->s1, sizeof(r->s0));
+        r->start_done = 1;
+    } else {
+        log_point(inst, k, 0);
+    }
+    log_point(inst, k, 1);
+    r->n_max = 0;
+    if (r->start_valid && r->end_valid) {
+        const peak_source_t src = {log_record(cv, k), r->t0, r->tn, r->tn - r->t0};
+        r->n_max = peak_maxima(inst, &src, r->v0, r->s0, r->v1, r->s1, r->max_t, r->max_v);
+    }
+    with_step_state(inst, k, 0);
+    r->analysed = 1;
+}
+
+/* Add the peaks of the kept steps that lie in the communication step so far, (comm_start, t]. */
+static void peak_log_add(fmu_instance_t *inst, double t)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    for (int k = 0; k < cv->log_n; k++) {
+        peak_record_t *r = &cv->log[k];
+        if (!(r->t_cut > cv->comm_start && r->t0 < t)) {
+            continue; /* outside (kept for its end values only, or not yet reached) */
+        }
+        log_analyse(inst, k);
+        for (int m = 0; m < r->n_max; m++) {
+            if (r->max_t[m] > cv->comm_start && r->max_t[m] <= t && r->max_t[m] <= r->t_cut) {
+                fmu_model.peaks_add(inst->model, r->max_v[m]);
+            }
+        }
+        if (r->end_valid && r->t_cut == r->tn && r->tn <= t) {
+            fmu_model.peaks_add(inst->model, r->v1);
+        }
+    }
+}
+
+/* Keep only the kept steps from `first` on, and the discrete states they refer to. */
+static void peak_log_keep_from(csfh_cvode_t *cv, int first)
+{
+    if (first > 0) {
+        memmove(cv->log, cv->log + first, (size_t)(cv->log_n - first) * sizeof(peak_record_t));
+        memmove(cv->log_data, log_record(cv, first),
+                (size_t)(cv->log_n - first) * RK45_RECORD_SIZE(NX) * sizeof(double));
+        cv->log_n -= first;
+    }
+    if (cv->log_n == 0) {
+        cv->snap_n = 0;
+        cv->snap_stale = 1;
+        return;
+    }
+    const int used = cv->log[0].snapshot; /* the snapshots are in the steps' order */
+    if (used > 0) {
+        memmove(cv->snap, cv->snap + (size_t)used * fmu_model.size,
+                (size_t)(cv->snap_n - used) * fmu_model.size);
+        cv->snap_n -= used;
+        for (int k = 0; k < cv->log_n; k++) {
+            cv->log[k].snapshot -= used;
+        }
+    }
+}
+
+/* Drop the kept steps that count only up to t, except the last of them (its end values may
+ * start the next step). */
+static void peak_log_drop(csfh_cvode_t *cv, double t)
+{
+    int first = 0;
+    while (first < cv->log_n && cv->log[first].t_cut <= t) {
+        first++;
+    }
+    peak_log_keep_from(cv, first > 0 ? first - 1 : 0);
+}
+
+/* Keep RK45's new step for the peaks (t_now: where the communication step has got to before
+ * it); 0 if it cannot be kept (out of memory, or a model without peaks_state: the step is then
+ * analysed now, as CVODE's). */
+static int peak_log_keep(fmu_instance_t *inst, double t_now)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    if (fmu_model.peaks_state == NULL) {
+        return 0;
+    }
+    if (cv->log == NULL) {
+        cv->log = (peak_record_t *)calloc(PEAK_LOG_MAX, sizeof(peak_record_t));
+        cv->log_data = (double *)calloc(PEAK_LOG_MAX * RK45_RECORD_SIZE(NX), sizeof(double));
+        cv->snap = (unsigned char *)calloc(PEAK_SNAPSHOTS, fmu_model.size);
+        cv->scratch = calloc(1, fmu_model.size);
+        if (cv->log == NULL || cv->log_data == NULL || cv->snap == NULL || cv->scratch == NULL) {
+            free(cv->log), free(cv->log_data), free(cv->snap), free(cv->scratch);
+            cv->log = NULL, cv->log_data = NULL, cv->snap = NULL, cv->scratch = NULL;
+            return 0;
+        }
+        peak_log_clear(cv);
+    }
+    if (cv->log_n == PEAK_LOG_MAX || (cv->snap_stale && cv->snap_n == PEAK_SNAPSHOTS)) {
+        /* piled up in this communication step: analyse them now, keep the last (its end
+         * values start the new step) */
+        peak_log_add(inst, t_now);
+        peak_log_keep_from(cv, cv->log_n - 1);
+    }
+    if (cv->snap_stale || cv->snap_n == 0) {
+        memcpy(cv->snap + (size_t)cv->snap_n * fmu_model.size, inst->model, fmu_model.size);
+        cv->snap_n++;
+        cv->snap_stale = 0;
+    }
+    const int k = cv->log_n;
+    double *rec = log_record(cv, k);
+    if (rk45_save_step(cv->rk, rec) != RK45_SUCCESS) {
+        return 0;
+    }
+    peak_record_t *r = &cv->log[k];
+    memset(r, 0, sizeof(*r));
+    r->t0 = rk45_record_start(rec);
+    r->tn = rk45_record_end(rec);
+    r->t_cut = r->tn;
+    r->snapshot = cv->snap_n - 1;
+    cv->log_n++;
+    return 1;
+}
+
+/* An event at t (local time) changes the discrete state: the kept step holding it stops counting
+ * there. */
+static void peak_log_event(csfh_cvode_t *cv, double t)
+{
+    if (cv->log_n > 0) {
+        peak_record_t *r = &cv->log[cv->log_n - 1];
+        if (t > r->t0 && t < r->t_cut) {
+            r->t_cut = t;
+        }
+    }
+    cv->snap_stale = 1;
+}
+
+void cs_peaks_flush(fmu_instance_t *inst)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    if (cv == NULL || cv->log_n == 0 || NX == 0 || !peak_work_vectors(cv)) {
+        return;
+    }
+    const double now = *fmu_time(inst) - cv->origin;
+    peak_log_add(inst, now);
+    /* what ends by now is done for this communication step, but the next one may need the
+     * last of them */
+    peak_log_drop(cv, now);
 }
 
 /* The part [ta, tb] of the communication step, the state at tb in cv->y; `stepped`: the
@@ -752,14 +1048,12 @@ static void peak_step(fmu_instance_t *inst, const double *y_end)
 static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
 {
     csfh_cvode_t *cv = inst->cvode;
-    if (fmu_model.n_peaks <= 0) {
-        return;
+    if (fmu_model.n_peaks <= 0 || !peak_work_vectors(cv)) {
+        return; /* (out of memory: the peaks fall back to the communication points) */
     }
-    if (cv->peak_y == NULL) {
-        cv->peak_y = N_VClone(cv->y);
-        cv->peak_dy = N_VClone(cv->y);
-        if (cv->peak_y == NULL || cv->peak_dy == NULL) {
-            return; /* out of memory: the peaks fall back to the communication points */
+    if (cv->method == FMU_CS_RK45) {
+        if (!stepped || peak_log_keep(inst, ta)) {
+            return; /* analysed when needed */
         }
     }
     if (stepped) {
@@ -806,6 +1100,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
         }
         inst->cvode_needs_reinit = 0;
         peaks_forget(inst->cvode); /* a new interpolant */
+        peak_log_clear(inst->cvode);
     }
     csfh_cvode_t *cv = inst->cvode;
     const long warnings = cv->warnings;
@@ -818,6 +1113,8 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
     if (fmu_model.n_peaks > 0) { /* the step's peaks start with the values at its start */
         fmu_model.peaks_begin(inst->model, inst->outputs_valid);
     }
+    cv->comm_start = now;
+    peak_log_drop(cv, now); /* RK45's steps that ended before: their peaks were not read */
     while (tret < t_end) {
         /* One internal step per call: the solution is taken at every step, and auto can check
          * the stiffness without waiting for the end of the communication step. No stop time:
@@ -825,7 +1122,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
          * beyond t_end is not repeated: the state at t_end comes from the interpolant (for this
          * and for later communication points the step covers), and a root reported beyond t_end
          * is kept pending until the communication step that contains it. */
-        int flag, stepped = 0;
+        int flag;
         const double tret_before = tret;
         if (cv->root_pending && cv->t_root <= t_end) {
             memcpy(N_VGetArrayPointer(cv->y), N_VGetArrayPointer(cv->y_root), NX * sizeof(double));
@@ -843,7 +1140,6 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             tret = t_end;
         } else {
             flag = solver_step(inst, &tret);
-            stepped = flag != STEP_FAILED;
             if (flag != STEP_FAILED && tret > t_end) {
                 if (flag == STEP_ROOT) {
                     memcpy(N_VGetArrayPointer(cv->y_root), N_VGetArrayPointer(cv->y), NX * sizeof(double));
@@ -854,7 +1150,14 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
                 tret = t_end;
             }
         }
-        steps += count_steps(inst);
+        const long added = count_steps(inst);
+        const int stepped = added > 0; /* a new step (not a second root inside the last one) */
+        steps += added;
+        if (cv->hint_code > 0 && stepped && cv->method == FMU_CS_RK45) {
+            /* the first step after an event: remember where the step-size control went */
+            cv->event_h[cv->hint_code] = rk45_next_step(cv->rk);
+            cv->hint_code = 0;
+        }
         if (flag == STEP_FAILED) {
             /* the integrator's message and flag are in the log; it returns the last successful
              * point in (tret, y): keep it, so that what the master reads is consistent (time,
@@ -888,7 +1191,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             inst->cvode_needs_reinit = 1;
             return fmi2Error;
         }
-        int restart = 0;
+        int restart = 0, kind = 0;
         if (flag == STEP_ROOT) {
             if (++events > MAX_EVENTS_PER_STEP) {
                 fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
@@ -899,14 +1202,23 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             }
             /* the discrete state changed: restart the integrator at the event (auto: with the
              * non-stiff method again) */
-            restart = fmu_event_update(inst) != 0;
+            kind = fmu_event_update(inst);
+            restart = kind != 0;
             if (restart) {
                 peaks_forget(cv); /* what follows the event has a new interpolant */
+                peak_log_event(cv, tret);
             }
         }
         fmi2Status s = fmi2OK;
         if (restart) {
-            s = solver_start(inst, automatic ? FMU_CS_RK45 : cv->method, tret);
+            /* RK45 starts with the step that suited the last event of this kind: the first-step
+             * estimate, made for smooth solutions, overshoots at a contact onset (the force
+             * grows as the indentation^1.5) by orders of magnitude, and the rejected attempts
+             * cost 6 evaluations each */
+            const int code = kind > 0 && kind < FMU_EVENT_KINDS ? kind : 0;
+            cv->hint_code = code;
+            s = solver_start(inst, automatic ? FMU_CS_RK45 : cv->method, tret,
+                             code > 0 ? cv->event_h[code] : 0.0);
             start_segment(cv, tret);
         } else if (automatic) {
             char why[256];
@@ -918,7 +1230,8 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
                 continue;
             }
             /* a new method from the current point (cv->y at tret is the step's end) */
-            s = solver_start(inst, method, tret);
+            s = solver_start(inst, method, tret, 0.0);
+            cv->hint_code = 0;
             start_window(cv, tret);
             peaks_forget(cv);
         } else {

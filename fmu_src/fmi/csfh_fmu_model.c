@@ -136,6 +136,11 @@ static void peaks_add(void *mv, const double *v)
     }
 }
 
+static void peaks_state(void *m, const void *from)
+{
+    ((csfh_model_t *)m)->z = ((const csfh_model_t *)from)->z;
+}
+
 /* Restored FMU state: the fields that are not stored table variables (checked by the glue:
  * time, states, inputs, parameters, contact.active/onset_speed/onset_time/release_*) and not
  * recomputed (d, out, der). */
@@ -203,5 +208,6 @@ const fmu_model_t fmu_model = {
     .peaks_begin = peaks_begin,
     .peak_values = peak_values,
     .peaks_add = peaks_add,
+    .peaks_state = peaks_state,
     .check_state = check_state,
 };

@@ -190,6 +190,7 @@ fmi2Status fmu_update_outputs(fmu_instance_t *inst, const char *function)
     if (prepare(inst, function) != fmi2OK) {
         return fmi2Error;
     }
+    cs_peaks_flush(inst); /* the peak outputs of the communication step */
     char msg[MSG_SIZE];
     msg[0] = '\0';
     const int status = fmu_model.outputs(inst->model, msg, sizeof(msg));
@@ -625,6 +626,9 @@ static fmi2Status set_values(fmu_instance_t *inst, const char *function,
         tunable = tunable || (v->causality == CSFH_CAUS_PARAMETER &&
                               !(inst->state & (FMU_INSTANTIATED | FMU_INITIALIZATION)));
     }
+    /* every value is valid: first the peaks of the communication step, with the values they
+     * were taken with (a parameter changes them; kept if the new ones are rolled back) */
+    cs_peaks_flush(inst);
     void *saved = NULL;
     if (tunable) { /* tunable parameters while running: apply, re-validate, roll back on failure */
         saved = malloc(fmu_model.size);
@@ -929,6 +933,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     } else if (!state_owned(inst, s, "fmi2GetFMUstate")) {
         return fmi2Error;
     }
+    cs_peaks_flush(inst); /* the snapshot holds the peaks of the communication step */
     snapshot_take(inst, s);
     /* CVODE's history (step size, order, Nordsieck array) is not part of the snapshot, and
      * fmi2SetFMUstate restarts the integrator at the restored point. Restart it here as well, so

@@ -82,6 +82,10 @@ typedef struct {
     void (*peaks_begin)(void *m, int outputs_current);
     int (*peak_values)(void *m, const double *x, double *v);
     void (*peaks_add)(void *m, const double *v);
+    /* Copy into m, from the model struct `from`, the discrete state the peak quantities depend
+     * on (csfh: the contact mode and onset rate), so that a step can be analysed for its peaks
+     * after an event has changed it (NULL: every step is analysed when taken). */
+    void (*peaks_state)(void *m, const void *from);
     /* A restored FMU state (fmi2SetFMUstate, fmi2DeSerializeFMUstate): check the fields of the
      * model struct that are neither stored table variables (the glue checks those: finite, in
      * range) nor recomputed (derived quantities, outputs, derivative cache), e.g. counts that

@@ -189,15 +189,15 @@ static int eval_roots(rk45_t *r, double t, const double *y, double *g)
     return RK45_SUCCESS;
 }
 
-int rk45_init(rk45_t *r, double t0, const double *y0, double h_max_first)
+int rk45_init(rk45_t *r, double t0, const double *y0, double h_max_first, double h_first)
 {
-    if (!isfinite(t0) || !(h_max_first > 0.0)) {
+    if (!isfinite(t0) || !(h_max_first > 0.0) || !(h_first >= 0.0) || !isfinite(h_first)) {
         return RK45_ILL_INPUT;
     }
     memcpy(r->y, y0, (size_t)r->n * sizeof(double));
     r->t_n = r->t_old = t0;
     r->h_last = 0.0;
-    r->h = 0.0;
+    r->h = fmin(h_first, h_max_first); /* 0: estimated at the first step */
     r->h_max_first = h_max_first;
     r->fac_old = 1e-4;
     r->fsal_swap = 0;
@@ -296,6 +296,28 @@ static void dense_coefficients(rk45_t *r)
     r->dense_valid = 1;
 }
 
+/* The dense output (k = 0) or its derivative (k = 1) at theta in [0, 1] of a step of size h
+ * from Shampine's coefficients r1..r5 (each n long, consecutive). */
+static void dense_eval(const double *c, int n, double h, double th, int k, double *out)
+{
+    const double th1 = 1.0 - th;
+    const double *r1 = c, *r2 = c + n, *r3 = c + 2 * n, *r4 = c + 3 * n, *r5 = c + 4 * n;
+    if (k == 0) {
+        /* y = r1 + th (r2 + (1 - th) (r3 + th (r4 + (1 - th) r5))) */
+        for (int i = 0; i < n; i++) {
+            out[i] = r1[i] + th * (r2[i] + th1 * (r3[i] + th * (r4[i] + th1 * r5[i])));
+        }
+    } else {
+        /* d/dt of the same polynomial (product rule, inside out), / h */
+        for (int i = 0; i < n; i++) {
+            const double cc = r4[i] + th1 * r5[i], dc = -r5[i];
+            const double b = r3[i] + th * cc, db = cc + th * dc;
+            const double a = r2[i] + th1 * b, da = -b + th1 * db;
+            out[i] = (a + th * da) / h;
+        }
+    }
+}
+
 int rk45_dense(rk45_t *r, double t, int k, double *out)
 {
     if (!r->have_step || (k != 0 && k != 1)) {
@@ -311,24 +333,53 @@ int rk45_dense(rk45_t *r, double t, int k, double *out)
     dense_coefficients(r);
     double th = (t - r->t_old) / h;
     th = th < 0.0 ? 0.0 : (th > 1.0 ? 1.0 : th);
-    const double th1 = 1.0 - th;
-    const double *r1 = r->dense[0], *r2 = r->dense[1], *r3 = r->dense[2], *r4 = r->dense[3],
-                 *r5 = r->dense[4];
-    if (k == 0) {
-        /* y = r1 + th (r2 + (1 - th) (r3 + th (r4 + (1 - th) r5))) */
-        for (int i = 0; i < r->n; i++) {
-            out[i] = r1[i] + th * (r2[i] + th1 * (r3[i] + th * (r4[i] + th1 * r5[i])));
-        }
-    } else {
-        /* d/dt of the same polynomial (product rule, inside out), / h */
-        for (int i = 0; i < r->n; i++) {
-            const double c = r4[i] + th1 * r5[i], dc = -r5[i];
-            const double b = r3[i] + th * c, db = c + th * dc;
-            const double a = r2[i] + th1 * b, da = -b + th1 * db;
-            out[i] = (a + th * da) / h;
-        }
-    }
+    dense_eval(r->dense[0], r->n, h, th, k, out);
     return RK45_SUCCESS;
+}
+
+int rk45_save_step(rk45_t *r, double *record)
+{
+    if (!r->have_step) {
+        return RK45_ILL_INPUT;
+    }
+    const size_t n = (size_t)r->n;
+    dense_coefficients(r);
+    record[0] = r->t_old;
+    record[1] = r->h_last;
+    memcpy(record + 2, r->dense[0], 5 * n * sizeof(double)); /* contiguous (rk45_create) */
+    memcpy(record + 2 + 5 * n, r->y, n * sizeof(double));
+    /* the step's first stage is k[0] until the next step swaps it with k[6] (FSAL) */
+    memcpy(record + 2 + 6 * n, r->fsal_swap ? r->k[0] : r->k[6], n * sizeof(double));
+    memcpy(record + 2 + 7 * n, r->fsal_swap ? r->k[6] : r->k[0], n * sizeof(double));
+    return RK45_SUCCESS;
+}
+
+void rk45_record_dense(const double *record, int n, double t, int k, double *out)
+{
+    const double h = record[1];
+    double th = (t - record[0]) / h;
+    th = th < 0.0 ? 0.0 : (th > 1.0 ? 1.0 : th);
+    dense_eval(record + 2, n, h, th, k, out);
+}
+
+double rk45_record_start(const double *record)
+{
+    return record[0];
+}
+
+double rk45_record_end(const double *record)
+{
+    return record[0] + record[1];
+}
+
+const double *rk45_record_y(const double *record, int n, int end)
+{
+    return end ? record + 2 + 5 * (size_t)n : record + 2; /* the start: r1 = y_old */
+}
+
+const double *rk45_record_f(const double *record, int n, int end)
+{
+    return record + 2 + (end ? 7 : 6) * (size_t)n;
 }
 
 /* Sign change of component i between a and b (or b exactly zero, a not). */
@@ -626,6 +677,11 @@ double rk45_current_time(const rk45_t *r)
 double rk45_last_step(const rk45_t *r)
 {
     return r->h_last;
+}
+
+double rk45_next_step(const rk45_t *r)
+{
+    return r->h;
 }
 
 void rk45_get_stats(const rk45_t *r, rk45_stats_t *s)

@@ -53,9 +53,10 @@ void rk45_free(rk45_t *r);
 /* Relative tolerance and n absolute tolerances (> 0; copied). */
 int rk45_set_tolerances(rk45_t *r, double rtol, const double *atol);
 
-/* (Re)start at (t0, y0): evaluates f and g there; the next step's size is estimated afresh
- * (one more evaluation of f), at most h_max_first. Statistics are kept across restarts. */
-int rk45_init(rk45_t *r, double t0, const double *y0, double h_max_first);
+/* (Re)start at (t0, y0): evaluates f and g there. The first step is h_first if > 0, else
+ * estimated (one more evaluation of f); at most h_max_first either way. Statistics are kept
+ * across restarts. */
+int rk45_init(rk45_t *r, double t0, const double *y0, double h_max_first, double h_first);
 
 /* One step: the next root inside the step already taken, or a new step (with its roots). On
  * RK45_SUCCESS (t, y) is the end of the step, on RK45_ROOT the root (the first point found past
@@ -66,8 +67,22 @@ int rk45_step(rk45_t *r, double *t, double *y);
  * (round-off beyond its ends is clamped). RK45_ILL_INPUT outside it or before a step. */
 int rk45_dense(rk45_t *r, double t, int k, double *out);
 
+/* The last step as a self-contained record of RK45_RECORD_SIZE(n) doubles (for analysing it
+ * later, after further steps): its times, Shampine's coefficients, the states and f at both
+ * ends. RK45_ILL_INPUT before a step. */
+#define RK45_RECORD_SIZE(n) (2 + 8 * (size_t)(n))
+int rk45_save_step(rk45_t *r, double *record);
+/* The state (k = 0) or its derivative (k = 1) at t in a record's step (clamped to it). */
+void rk45_record_dense(const double *record, int n, double t, int k, double *out);
+double rk45_record_start(const double *record); /* the step's start time */
+double rk45_record_end(const double *record);   /* the step's end time */
+/* The state (end = 0: at the start, 1: at the end) and f there, exactly as the step used them. */
+const double *rk45_record_y(const double *record, int n, int end);
+const double *rk45_record_f(const double *record, int n, int end);
+
 double rk45_current_time(const rk45_t *r); /* t_n: the end of the last step (or the start) */
 double rk45_last_step(const rk45_t *r);    /* h of the last step, 0 before it */
+double rk45_next_step(const rk45_t *r);    /* h the step-size control proposes next (0: none yet) */
 void rk45_get_stats(const rk45_t *r, rk45_stats_t *s);
 const char *rk45_message(const rk45_t *r); /* what the last failure was, with its values */
 const char *rk45_flag_name(int flag);
