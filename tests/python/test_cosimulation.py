@@ -7,9 +7,10 @@ the four integration methods (solver.method: auto, BDF, Adams, RK45) with auto's
 when stiff.
 
 Tolerances: "tight" is a relative tolerance of 1e-10 for both integrators (the FMU's, set with
-fmi2SetupExperiment; fmpy's CVode in model exchange). CS onset times are read from the FMU's logEvents
-lines, which print the located event time with 17 digits (fmpy routes the log of every live
-instance to the last one created, so instances whose log is read run one after the other)."""
+fmi2SetupExperiment; fmpy's CVode in model exchange). CS onset times are read from the FMU's
+logEvents lines, which print the located event time with 17 digits (fmpy routes the log of every
+live instance to the last one created, so instances whose log is read run one after the
+other)."""
 
 from __future__ import annotations
 
@@ -250,8 +251,8 @@ def test_variable_step_sizes_give_the_fixed_step_trajectory(
     """Random step sizes (1e-4 s to 0.1 s) against fixed 1e-3 s steps on the csfh scene (rtol
     1e-10): the communication points do not cut the integrator's steps (it steps past them and
     interpolates) and do not set its first step after an event, so both masters drive the very
-    same integrator steps: the same contacts and, at every 0.1 s, the same state, to round-off (1e-12
-    m; 1e-10 m/s). Before, with a stop time at every communication point, the two differed by
+    same integrator steps: the same contacts and, at every 0.1 s, the same state, to round-off
+    (1e-12 m; 1e-10 m/s). Before, with a stop time at every communication point, the two differed by
     the method's error at this tolerance (up to 1e-7)."""
     scene = load_scene("csfh")
     blocks = [0.1 * k for k in range(1, 6)]

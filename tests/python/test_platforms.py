@@ -23,7 +23,7 @@ import pytest
 from fmpy.model_description import ModelDescription
 
 from csfh import load_scene
-from csfh.scene import Scene
+from csfh.model.scene import Scene
 
 ROOT = Path(__file__).resolve().parents[2]
 BUILD = ROOT / "build"
