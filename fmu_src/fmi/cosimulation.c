@@ -1007,11 +1007,13 @@ static int peak_log_keep(fmu_instance_t *inst, double t_now)
         return 0;
     }
     peak_record_t *r = &cv->log[k];
-    memset(r, 0, sizeof(*r));
     r->t0 = rk45_record_start(rec);
     r->tn = rk45_record_end(rec);
     r->t_cut = r->tn;
     r->snapshot = cv->snap_n - 1;
+    r->start_done = r->end_done = r->analysed = 0;
+    r->start_valid = r->end_valid = 0;
+    r->n_max = 0;
     cv->log_n++;
     return 1;
 }
@@ -1050,6 +1052,10 @@ static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
     csfh_cvode_t *cv = inst->cvode;
     if (fmu_model.n_peaks <= 0 || !peak_work_vectors(cv)) {
         return; /* (out of memory: the peaks fall back to the communication points) */
+    }
+    if (fmu_model.peaks_tracked != NULL && !fmu_model.peaks_tracked(inst->model)) {
+        peaks_forget(cv); /* nothing to track in this discrete state (out of contact) */
+        return;
     }
     if (cv->method == FMU_CS_RK45) {
         if (!stepped || peak_log_keep(inst, ta)) {

@@ -141,6 +141,12 @@ static void peaks_state(void *m, const void *from)
     ((csfh_model_t *)m)->z = ((const csfh_model_t *)from)->z;
 }
 
+static int peaks_tracked(const void *mv)
+{
+    const csfh_model_t *m = (const csfh_model_t *)mv;
+    return m->z.in_contact && m->p.law != CSFH_CONTACTLAW_NONE; /* as csfh_model_peak_values */
+}
+
 /* Restored FMU state: the fields that are not stored table variables (checked by the glue:
  * time, states, inputs, parameters, contact.active/onset_speed/onset_time/release_*) and not
  * recomputed (d, out, der). */
@@ -209,5 +215,6 @@ const fmu_model_t fmu_model = {
     .peak_values = peak_values,
     .peaks_add = peaks_add,
     .peaks_state = peaks_state,
+    .peaks_tracked = peaks_tracked,
     .check_state = check_state,
 };

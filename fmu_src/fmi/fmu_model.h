@@ -86,6 +86,9 @@ typedef struct {
      * on (csfh: the contact mode and onset rate), so that a step can be analysed for its peaks
      * after an event has changed it (NULL: every step is analysed when taken). */
     void (*peaks_state)(void *m, const void *from);
+    /* 1 if the peak quantities can be nonzero in the current discrete state (csfh: in the
+     * contact mode), 0 if peak_values would return 0 whatever the state (NULL: always 1). */
+    int (*peaks_tracked)(const void *m);
     /* A restored FMU state (fmi2SetFMUstate, fmi2DeSerializeFMUstate): check the fields of the
      * model struct that are neither stored table variables (the glue checks those: finite, in
      * range) nor recomputed (derived quantities, outputs, derivative cache), e.g. counts that

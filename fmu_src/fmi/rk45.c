@@ -83,7 +83,7 @@ struct rk45 {
     double *w;        /* work vector */
     double h;         /* the next step's size (0: estimate it) */
     double h_max_first;
-    double fac_old;   /* PI control: the previous accepted error */
+    double log_fac_old; /* PI control: log of the previous accepted error */
     int fsal_swap;    /* the last step was accepted: k[6] becomes the next k[0] */
     int rejected;     /* the last attempt was rejected: no growth on the next acceptance */
     int dense_valid;
@@ -199,7 +199,7 @@ int rk45_init(rk45_t *r, double t0, const double *y0, double h_max_first, double
     r->h_last = 0.0;
     r->h = fmin(h_first, h_max_first); /* 0: estimated at the first step */
     r->h_max_first = h_max_first;
-    r->fac_old = 1e-4;
+    r->log_fac_old = log(1e-4);
     r->fsal_swap = 0;
     r->rejected = 0;
     r->dense_valid = 0;
@@ -638,12 +638,14 @@ int rk45_step(rk45_t *r, double *t, double *y)
         r->stats.stiff++;
     }
     /* the next step's size: PI control */
-    double fac = SAFETY * pow(fmax(err, 1e-10), -PI_ALPHA) * pow(r->fac_old, PI_BETA);
+    /* SAFETY err^-alpha err_old^beta, as one exponential */
+    const double log_err = log(fmax(err, 1e-10));
+    double fac = SAFETY * exp(-PI_ALPHA * log_err + PI_BETA * r->log_fac_old);
     fac = fmin(FAC_MAX, fmax(FAC_MIN, fac));
     if (r->rejected) {
         fac = fmin(fac, 1.0);
     }
-    r->fac_old = fmax(err, 1e-4);
+    r->log_fac_old = log_err > log(1e-4) ? log_err : log(1e-4);
     r->rejected = 0;
     /* advance: y_old <- y <- y_new */
     double *old = r->y_old;
