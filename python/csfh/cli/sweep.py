@@ -37,7 +37,7 @@ def _execution_options(p: argparse.ArgumentParser, command: str) -> None:
         choices=("me", "cs"),
         default="me",
         help="FMU interface of the event-driven models: me = model exchange with fmpy's "
-        "CVode, events located exactly; cs = co-simulation, CVODE inside the FMU",
+        "CVode, events located exactly; cs = co-simulation, the integrator inside the FMU",
     )
     p.add_argument(
         "--stop-time",
@@ -135,7 +135,7 @@ def _check_models(models: list[str] | None, default: tuple[str, ...]) -> tuple[s
 
 def _interface_text(interface: str, rtol: float) -> str:
     if interface == "cs":
-        return f"co-simulation (CVODE inside the FMU), rtol {rtol:g}"
+        return f"co-simulation (the integrator inside the FMU), rtol {rtol:g}"
     return f"model exchange with fmpy's CVode (BDF, events by root finding), rtol {rtol:g}"
 
 
