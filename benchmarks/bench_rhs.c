@@ -2,8 +2,10 @@
 /* Cost of one right-hand-side evaluation of the C model, and what switching parts off saves.
  * All configurations are timed in the same run, interleaved and repeated; the report gives the
  * median time per call, the fastest repeat (on a shared machine the least disturbed one: what
- * the code itself costs) and ratios to the full model. Build: cmake --build build --target
- * bench_rhs; run: build/bench_rhs. */
+ * the code itself costs) and ratios to the full model. The stress outputs (flexure stress,
+ * Hertz pressure: docs/model.md §14.2-14.3) are not part of the right-hand side: their cost is
+ * timed separately, per evaluation, as what reading them costs at an output point. Build:
+ * cmake --build build --target bench_rhs; run: build/bench_rhs. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
@@ -30,6 +32,9 @@ typedef struct {
     double x[6]; /* state: in contact (gap < 0) or free */
 } config_t;
 
+/* What is timed for a configuration: the RHS, or one of the output-time stress evaluations. */
+enum { KIND_RHS, KIND_STRESSES, KIND_FLEXURE_STRESS, KIND_PRESSURE };
+
 int main(void)
 {
     /* a state in contact with sliding (indentation 5e-5 m at -60 deg, v_T != 0) and a free one */
@@ -43,7 +48,12 @@ int main(void)
         {"full, free flight (gap > 0)", CSFH_CONTACTLAW_LN_SPHERES, 1, 1, {0}},
         {"law none, flexure on", CSFH_CONTACTLAW_NONE, 1, 1, {0}},
         {"law none, flexure off (gravity only)", CSFH_CONTACTLAW_NONE, 0, 0, {0}},
+        {"outputs only: stresses (flexure + Hertz pressure)", CSFH_CONTACTLAW_LN_SPHERES, 1, 1, {0}},
+        {"outputs only: flexure stress", CSFH_CONTACTLAW_LN_SPHERES, 1, 1, {0}},
+        {"outputs only: Hertz pressure", CSFH_CONTACTLAW_LN_SPHERES, 1, 1, {0}},
     };
+    const int kind[] = {KIND_RHS, KIND_RHS, KIND_RHS, KIND_RHS, KIND_RHS, KIND_RHS, KIND_RHS,
+                        KIND_STRESSES, KIND_FLEXURE_STRESS, KIND_PRESSURE};
     enum { NC = sizeof(configs) / sizeof(configs[0]), REPEATS = 15, CALLS = 200000 };
     csfh_model_t models[NC];
     double xs[NC][6];
@@ -70,10 +80,30 @@ int main(void)
         for (int c = 0; c < NC; c++) { /* interleaved: load changes hit all configurations */
             double xdot[6];
             const double t0 = now();
-            for (int k = 0; k < CALLS; k++) {
-                xs[c][5] += 1e-12; /* defeat hoisting */
-                csfh_model_derivatives(&models[c], xs[c], xdot);
-                sink += xdot[3];
+            if (kind[c] == KIND_RHS) {
+                for (int k = 0; k < CALLS; k++) {
+                    xs[c][5] += 1e-12; /* defeat hoisting */
+                    csfh_model_derivatives(&models[c], xs[c], xdot);
+                    sink += xdot[3];
+                }
+            } else if (kind[c] == KIND_STRESSES) {
+                for (int k = 0; k < CALLS; k++) {
+                    xs[c][2] += 1e-12;
+                    csfh_stresses_t st;
+                    csfh_model_stresses(&models[c], xs[c], 2000.0 + xs[c][2], &st);
+                    sink += st.flexure_stress + st.contact_pressure;
+                }
+            } else if (kind[c] == KIND_FLEXURE_STRESS) {
+                for (int k = 0; k < CALLS; k++) {
+                    xs[c][2] += 1e-12;
+                    sink += csfh_model_flexure_stress(&models[c], xs[c], NULL);
+                }
+            } else {
+                for (int k = 0; k < CALLS; k++) {
+                    xs[c][2] += 1e-12;
+                    sink += csfh_hertz_line_pressure(2000.0 + xs[c][2], models[c].d.E_star,
+                                                     models[c].p.L, models[c].d.R_conformal, NULL);
+                }
             }
             samples[c][r] = (now() - t0) / CALLS;
         }
@@ -92,5 +122,7 @@ int main(void)
     }
     printf("target: full model in contact <= 80 ns per call: median %s, best repeat %s\n",
            median[0] <= 80e-9 ? "met" : "NOT met", fastest[0] <= 80e-9 ? "met" : "NOT met");
+    printf("the right-hand side evaluates no stress (csfh_model_derivatives); the stresses cost the\n"
+           "last rows per output point that reads them (docs/model.md §14.5)\n");
     return sink == 12345.0;
 }

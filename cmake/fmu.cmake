@@ -136,8 +136,8 @@ function(csfh_add_fmu_package name)
   add_custom_command(
     OUTPUT ${dir}/modelDescription.xml ${dir}/index.html
     COMMAND Python3::Interpreter ${PROJECT_SOURCE_DIR}/modelDescription/generate.py
-            --version ${PROJECT_VERSION}
-            ${variables} ${dir} --epoch ${CSFH_SOURCE_DATE_EPOCH} --source-files ${source_names}
+            --version ${PROJECT_VERSION} ${variables} ${dir} --epoch ${CSFH_SOURCE_DATE_EPOCH}
+            --source-files ${source_names}
     COMMAND Python3::Interpreter ${PROJECT_SOURCE_DIR}/modelDescription/document.py
             --version ${PROJECT_VERSION} ${variables} ${dir}/index.html
     DEPENDS ${variables} ${PROJECT_SOURCE_DIR}/modelDescription/generate.py

@@ -3,6 +3,7 @@
 #include "csfh_common.h"
 
 #include <math.h>
+#include <stddef.h>
 
 void csfh_arc_compliance(const csfh_arc_beam_t *beam, double C[3][3])
 {
@@ -126,4 +127,80 @@ double csfh_flexure_force(const csfh_flexure_t *flex, const double q[3], double 
     Q[1] = -w[1];
     Q[2] = -(sx * w[1] - sy * w[0] + w[2]);
     return 0.5 * (dp[0] * w[0] + dp[1] * w[1] + dp[2] * w[2]);
+}
+
+void csfh_flexure_tip_wrench(const csfh_flexure_t *flex, const double q[3], double w[3])
+{
+    /* the same operations as csfh_flexure_force, stopped before the rotation back to global */
+    const double c = cos(q[2]), s = sin(q[2]);
+    const double sx = c * flex->sbar[0] - s * flex->sbar[1];
+    const double sy = s * flex->sbar[0] + c * flex->sbar[1];
+    const double dp[3] = {q[0] + sx - flex->sbar[0], q[1] + sy - flex->sbar[1], q[2]};
+    if (flex->conservative) {
+        for (int i = 0; i < 3; i++) {
+            w[i] = flex->K0[i][0] * dp[0] + flex->K0[i][1] * dp[1] + flex->K0[i][2] * dp[2];
+        }
+        return;
+    }
+    const double db[3] = {c * dp[0] + s * dp[1], -s * dp[0] + c * dp[1], dp[2]};
+    for (int i = 0; i < 3; i++) {
+        w[i] = flex->K0[i][0] * db[0] + flex->K0[i][1] * db[1] + flex->K0[i][2] * db[2];
+    }
+}
+
+void csfh_arc_section_setup(const csfh_arc_beam_t *beam, double phi_root, csfh_arc_section_t *sec)
+{
+    const double psi = csfh_flexure_frame_angle(phi_root, beam->beta);
+    sec->rho = beam->rho;
+    sec->beta = beam->beta;
+    sec->area = beam->b * beam->h;
+    sec->section_modulus = beam->b * beam->h * beam->h / 6.0;
+    sec->cos_psi = cos(psi);
+    sec->sin_psi = sin(psi);
+    sec->cos_beta = cos(beam->beta);
+    sec->sin_beta = sin(beam->beta);
+}
+
+double csfh_arc_stress_max(const csfh_arc_section_t *sec, const double w[3], double *location)
+{
+    /* the wrench in the tip frame (n, t): F_n, F_t, M (Eq. 2.2) */
+    const double Fn = sec->cos_psi * w[0] + sec->sin_psi * w[1];
+    const double Ft = -sec->sin_psi * w[0] + sec->cos_psi * w[1];
+    /* Eq. (2.2): N(alpha) = cos(alpha) F_n - sin(alpha) F_t and m(alpha) = M0 - rho N(alpha),
+     * M0 = M + rho F_n; sigma(N) = |N| / A + |M0 - rho N| / Z (docs/model.md Eq. (14.4)) */
+    const double M0 = w[2] + sec->rho * Fn;
+    /* candidates from the root (alpha = beta) to the tip (alpha = 0); N = +-|F| where
+     * [cos(alpha), sin(alpha)] = +-[F_n, -F_t] / |F| */
+    double N[4], alpha[4];
+    int n = 0;
+    N[n] = sec->cos_beta * Fn - sec->sin_beta * Ft;
+    alpha[n++] = sec->beta;
+    const double F = sqrt(Fn * Fn + Ft * Ft);
+    if (F > 0.0) {
+        double a_max = atan2(-Ft, Fn); /* N = +|F| */
+        a_max = a_max < 0.0 ? a_max + 2.0 * CSFH_PI : a_max;
+        const double a_min = a_max < CSFH_PI ? a_max + CSFH_PI : a_max - CSFH_PI; /* N = -|F| */
+        const double first = a_max > a_min ? a_max : a_min, second = a_max > a_min ? a_min : a_max;
+        const double a_sorted[2] = {first, second};
+        for (int k = 0; k < 2; k++) {
+            if (a_sorted[k] > 0.0 && a_sorted[k] < sec->beta) {
+                N[n] = a_sorted[k] == a_max ? F : -F;
+                alpha[n++] = a_sorted[k];
+            }
+        }
+    }
+    N[n] = Fn;
+    alpha[n++] = 0.0;
+    double best = -1.0, best_alpha = sec->beta;
+    for (int i = 0; i < n; i++) {
+        const double sigma = fabs(N[i]) / sec->area + fabs(M0 - sec->rho * N[i]) / sec->section_modulus;
+        if (sigma > best) {
+            best = sigma;
+            best_alpha = alpha[i];
+        }
+    }
+    if (location != NULL) {
+        *location = sec->beta - best_alpha;
+    }
+    return best;
 }

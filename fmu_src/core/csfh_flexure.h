@@ -43,4 +43,33 @@ int csfh_flexure_setup(const csfh_arc_beam_t *beam, const double OF[2], double p
  * Q_e = -T_e(s) K(theta) dp (PHYSICS.md 2.4). Returns the elastic energy 1/2 dp^T K dp [J]. */
 double csfh_flexure_force(const csfh_flexure_t *flex, const double q[3], double Q[3]);
 
+/* The wrench w = [F_x, F_y, M] that body 1 applies to the beam tip C1 at q, in the frame of the
+ * beam's reference geometry (the arc of PHYSICS.md 1.2): body-frame components for the
+ * co-rotated law (the beam turns with body 1), global components for the conservative law
+ * (fixed K0). The same wrench as csfh_flexure_force's (w = K(theta) dp, PHYSICS.md 2.4). */
+void csfh_flexure_tip_wrench(const csfh_flexure_t *flex, const double q[3], double w[3]);
+
+/* The beam's section data for the stress outputs (docs/model.md §14.2), from the beam and the
+ * root angle (csfh_arc_section_setup). */
+typedef struct {
+    double rho, beta;         /* m, rad */
+    double area;              /* b h, m^2 */
+    double section_modulus;   /* b h^2 / 6, m^3 */
+    double cos_psi, sin_psi;  /* the tip frame n = e(psi) of PHYSICS.md 1.3 */
+    double cos_beta, sin_beta;
+} csfh_arc_section_t;
+
+void csfh_arc_section_setup(const csfh_arc_beam_t *beam, double phi_root, csfh_arc_section_t *sec);
+
+/* Largest normal stress over the arc under the tip wrench w (reference-frame components, as
+ * csfh_flexure_tip_wrench gives), docs/model.md §14.2: with the internal axial force N(alpha) and
+ * bending moment m(alpha) of Eq. (2.2) at the section alpha from the tip,
+ *   sigma(alpha) = |N| / (b h) + 6 |m| / (b h^2)
+ * (slender beam, straight-beam bending stress at the outer fibres, shear stress neglected).
+ * m = (M + rho F_n) - rho N makes sigma a convex function of N, so its maximum over the arc lies
+ * at the root, at the tip or where N is extreme (|N| = |F|): four candidates, no search. Returns
+ * sigma_max [Pa] and, in *location (may be NULL), the arc angle of that section measured from
+ * the root C2 [rad, 0 .. beta] (ties: the section nearest the root). */
+double csfh_arc_stress_max(const csfh_arc_section_t *sec, const double w[3], double *location);
+
 #endif

@@ -143,8 +143,12 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
     }
     d.sbar[0] = d.flexure.sbar[0];
     d.sbar[1] = d.flexure.sbar[1];
+    csfh_arc_section_setup(&beam, p->phi_root, &d.arc);
+    /* Hertz line contact of the pin in the bore (docs/model.md §14.3) */
+    d.E_star = csfh_contact_modulus(p->E1, p->nu1, p->E2, p->nu2);
+    d.R_conformal = p->R1 * p->R2 / (p->R2 - p->R1);
     const double derived[] = {d.delta, d.K_spheres, d.K_cylinders, d.xi, d.esdu_F_max,
-                              d.sbar[0], d.sbar[1]};
+                              d.sbar[0], d.sbar[1], d.E_star, d.R_conformal};
     for (size_t i = 0; i < sizeof(derived) / sizeof(derived[0]); i++) {
         if (!isfinite(derived[i])) {
             snprintf(msg, msg_size, "a derived quantity is not finite (check the parameters)");
@@ -157,8 +161,11 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
 
 void csfh_model_smooth_forces(csfh_model_t *m, const double q[3], double Q[3])
 {
-    Q[0] = m->u_in[0];
-    Q[1] = m->u_in[1] - m->p.m1 * m->p.g; /* Q_g = [0, -m1 g, 0] */
+    /* Q_ext + Q_g, Q_g = [0, -m1 g, 0], and the d'Alembert force -m1 a_base at G1 of the frame's
+     * acceleration (docs/model.md Eq. (14.1)); with a_base = 0 the sums are bitwise those
+     * without it (x - 0 = x) */
+    Q[0] = m->u_in[0] - m->p.m1 * m->a_base[0];
+    Q[1] = m->u_in[1] - m->p.m1 * m->p.g - m->p.m1 * m->a_base[1];
     Q[2] = m->u_in[2];
     if (m->p.flexure_enabled) {
         double Qe[3];
@@ -307,18 +314,53 @@ void csfh_model_init_discrete(csfh_model_t *m)
     csfh_model_event_update(m);
 }
 
+int csfh_model_peaks_tracked(const csfh_model_t *m)
+{
+    const int contact = m->z.in_contact && m->p.law != CSFH_CONTACTLAW_NONE;
+    const int stress = m->p.track_stress_peak && m->p.flexure_enabled;
+    return contact || stress;
+}
+
 int csfh_model_peak_values(csfh_model_t *m, const double x[6], double v[CSFH_N_PEAKS])
 {
-    v[0] = v[1] = v[2] = 0.0;
-    if (!m->z.in_contact || m->p.law == CSFH_CONTACTLAW_NONE) {
+    v[0] = v[1] = v[2] = v[3] = 0.0;
+    const int contact = m->z.in_contact && m->p.law != CSFH_CONTACTLAW_NONE;
+    const int stress = m->p.track_stress_peak && m->p.flexure_enabled;
+    if (!contact && !stress) {
         return 0;
     }
-    csfh_contact_eval_t c;
-    csfh_model_contact(m, x, x + 3, &c);
-    v[0] = c.F_N;
-    v[1] = fabs(c.F_T);
-    v[2] = c.rho;
+    if (contact) {
+        csfh_contact_eval_t c;
+        csfh_model_contact(m, x, x + 3, &c);
+        v[0] = c.F_N;
+        v[1] = fabs(c.F_T);
+        v[2] = c.rho;
+    }
+    if (stress) {
+        v[3] = csfh_model_flexure_stress(m, x, NULL);
+    }
     return 1;
+}
+
+double csfh_model_flexure_stress(const csfh_model_t *m, const double q[3], double *location)
+{
+    if (!m->p.flexure_enabled) {
+        if (location != NULL) {
+            *location = 0.0;
+        }
+        return 0.0;
+    }
+    double w[3];
+    csfh_flexure_tip_wrench(&m->d.flexure, q, w);
+    return csfh_arc_stress_max(&m->d.arc, w, location);
+}
+
+void csfh_model_stresses(const csfh_model_t *m, const double q[3], double F_N,
+                         csfh_stresses_t *s)
+{
+    s->flexure_stress = csfh_model_flexure_stress(m, q, &s->flexure_location);
+    s->contact_pressure = csfh_hertz_line_pressure(F_N, m->d.E_star, m->p.L, m->d.R_conformal,
+                                                   &s->contact_half_width);
 }
 
 int csfh_model_outputs(csfh_model_t *m)
@@ -352,11 +394,27 @@ int csfh_model_outputs(csfh_model_t *m)
     }
     o->E_contact = c.touching ? csfh_normal_elastic_energy(&m->d.normal, c.rho) : 0.0;
     o->E_total = o->E_kinetic + o->E_gravity + o->E_flexure + o->E_contact;
-    /* peaks: the communication step's so far (co-simulation), and the current values */
-    const double now[CSFH_N_PEAKS] = {o->F_N, fabs(o->F_T), o->indentation};
-    double *peak[CSFH_N_PEAKS] = {&o->F_N_peak, &o->F_T_peak, &o->indentation_peak};
+    /* stresses (docs/model.md §14.2-14.3): at output time only */
+    csfh_stresses_t st;
+    csfh_model_stresses(m, x, o->F_N, &st);
+    o->stress_max = st.flexure_stress;
+    o->stress_location = st.flexure_location;
+    o->pressure_max = st.contact_pressure;
+    o->half_width = st.contact_half_width;
+    /* peaks: the communication step's so far (co-simulation), and the current values; the
+     * flexure stress only where it is tracked */
+    const double now[CSFH_N_PEAKS] = {o->F_N, fabs(o->F_T), o->indentation, o->stress_max};
+    double *peak[CSFH_N_PEAKS] = {&o->F_N_peak, &o->F_T_peak, &o->indentation_peak,
+                                  &o->stress_max_peak};
     for (int j = 0; j < CSFH_N_PEAKS; j++) {
-        *peak[j] = m->peaks.active && m->peaks.v[j] > now[j] ? m->peaks.v[j] : now[j];
+        const int tracked = m->peaks.active && (j < 3 || m->p.track_stress_peak);
+        *peak[j] = tracked && m->peaks.v[j] > now[j] ? m->peaks.v[j] : now[j];
     }
+    /* p0 increases with F_N: the pressure of the peak force is the peak pressure (§14.5) */
+    o->pressure_max_peak =
+        csfh_hertz_line_pressure(o->F_N_peak, m->d.E_star, m->p.L, m->d.R_conformal, NULL);
+    /* margins 1 - peak / allowable (§14.4): 1 unloaded, 0 at the allowable, < 0 beyond */
+    o->stress_margin = 1.0 - o->stress_max_peak / m->p.stress_allowable;
+    o->pressure_margin = 1.0 - o->pressure_max_peak / m->p.pressure_allowable;
     return c.status == CSFH_LAW_ESDU_CLAMPED ? CSFH_WARN_ESDU_CLAMPED : CSFH_OK;
 }

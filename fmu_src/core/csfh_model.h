@@ -1,6 +1,7 @@
-/* The CSFH model: parameters, states and the right-hand side of M q'' = Q_e + Q_g + Q_c + Q_ext
- * (PHYSICS.md conventions, paper Eqs. 27-30), plus the contact mode logic of the event-driven
- * compliant models. No FMI types here: the FMI glue, the CVODE co-simulation and the Python
+/* The CSFH model: parameters, states and the right-hand side of
+ * M q'' = Q_e + Q_g + Q_c + Q_ext + Q_base (PHYSICS.md conventions, paper Eqs. 27-30; the base
+ * acceleration of docs/model.md §14.1), plus the contact mode logic of the event-driven compliant
+ * models and the stress outputs (§14.2-14.4). No FMI types here: the FMI glue, the CVODE co-simulation and the Python
  * harness (through the core library) call these functions. */
 #ifndef CSFH_MODEL_H
 #define CSFH_MODEL_H
@@ -34,12 +35,15 @@ typedef struct {
     double v_min;      /* m/s */
     double gap_hysteresis; /* m */
     double max_initial_indentation; /* m: deepest start state accepted */
+    double pressure_allowable; /* Pa: allowable Hertz pressure of the conjugate surfaces */
     /* friction */
     int friction_enabled;
     double fd, fa, v0, v1;
     /* flexure */
     int flexure_enabled, bending_only, conservative;
     double rho, beta, OF[2], phi_root, h, b, Eh, nuh, kappa;
+    double stress_allowable; /* Pa: allowable normal stress of the flexure */
+    int track_stress_peak;   /* co-simulation: track the flexure stress peak inside the step */
 } csfh_params_t;
 
 /* Quantities derived from the parameters (csfh_model_prepare). */
@@ -48,7 +52,10 @@ typedef struct {
     double K_spheres, K_cylinders, xi, esdu_F_max;
     double sbar[2];     /* flexure attachment, body frame */
     csfh_flexure_t flexure;
+    csfh_arc_section_t arc; /* the flexure's section data (stress outputs) */
     csfh_normal_law_t normal;
+    double E_star;          /* contact modulus of Eq. (17), Pa */
+    double R_conformal;     /* effective radius of the pin in the bore, R1 R2 / (R2 - R1), m */
 } csfh_derived_t;
 
 /* Discrete state of the event-driven compliant contact. */
@@ -70,17 +77,22 @@ typedef struct {
     double F_N, F_T, indentation, gap, v_T, indentation_rate;
     double E_total, E_kinetic, E_gravity, E_flexure, E_contact;
     double F_N_peak, F_T_peak, indentation_peak; /* see csfh_peaks_t */
+    /* stresses (docs/model.md §14.2-14.4): evaluated with the outputs, never in the RHS */
+    double stress_max, stress_location, stress_max_peak, stress_margin;
+    double pressure_max, half_width, pressure_max_peak, pressure_margin;
 } csfh_outputs_t;
 
 /* Peak outputs (contact.F_N_peak, contact.F_T_peak = the largest |F_T|,
- * contact.indentation_peak): in co-simulation the largest values over the last communication
- * step (its end included), located on the integrator's interpolant by the co-simulation
- * stepper (csfh_model_peak_values); where no step was taken (model exchange, before the first
- * fmi2DoStep) the instantaneous values. */
-#define CSFH_N_PEAKS 3
+ * contact.indentation_peak, flexure.stress_max_peak): in co-simulation the largest values over
+ * the last communication step (its end included), located on the integrator's interpolant by
+ * the co-simulation stepper (csfh_model_peak_values); where no step was taken (model exchange,
+ * before the first fmi2DoStep) the instantaneous values. The flexure stress is tracked only
+ * with flexure.track_stress_peak (it costs evaluations in flight too); contact.pressure_max_peak
+ * is the pressure of contact.F_N_peak (p0 grows with F_N: docs/model.md §14.5). */
+#define CSFH_N_PEAKS 4
 typedef struct {
     int active;               /* 1 after the first communication step */
-    double v[CSFH_N_PEAKS];   /* F_N, |F_T|, indentation so far in this communication step */
+    double v[CSFH_N_PEAKS];   /* F_N, |F_T|, indentation, flexure stress so far in this step */
 } csfh_peaks_t;
 
 typedef struct {
@@ -88,6 +100,7 @@ typedef struct {
     double x[6];        /* x, y, theta, vx, vy, omega */
     double der[6];      /* derivative cache for get-by-reference */
     double u_in[3];     /* F_ext[1], F_ext[2], M_ext */
+    double a_base[2];   /* a_base[1], a_base[2]: acceleration of body 2 (the frame), global, m/s^2 */
     csfh_params_t p;
     csfh_derived_t d;
     csfh_discrete_t z;
@@ -140,7 +153,9 @@ int csfh_model_check_start(const csfh_model_t *m, char *msg, size_t msg_size);
 /* Set the discrete contact state from the initial continuous state (end of initialization). */
 void csfh_model_init_discrete(csfh_model_t *m);
 
-/* Smooth generalized forces at q: gravity + inputs + flexure (if enabled). */
+/* Smooth generalized forces at q: gravity + inputs + the d'Alembert force -m1 a_base of the
+ * base acceleration at G1 (docs/model.md §14.1) + flexure (if enabled). The Moreau stepper and
+ * the RK4 baseline take them from here too. */
 void csfh_model_smooth_forces(csfh_model_t *m, const double q[3], double Q[3]);
 
 /* Compliant contact force at (q, u) with the current discrete state: zero outside the contact
@@ -164,7 +179,27 @@ int csfh_model_event_update(csfh_model_t *m);
  * indentation}. Returns 0 (and zeros) outside the contact mode, without evaluating anything. */
 int csfh_model_peak_values(csfh_model_t *m, const double x[6], double v[CSFH_N_PEAKS]);
 
-/* Fill m->out (forces, gap, energies) at the current state. */
+/* 1 if csfh_model_peak_values can return anything but zeros in the current discrete state and
+ * parameters (the contact mode, or the flexure stress tracked), whatever the state. */
+int csfh_model_peaks_tracked(const csfh_model_t *m);
+
+/* Stresses at one configuration (docs/model.md §14.2-14.3). */
+typedef struct {
+    double flexure_stress;     /* Pa: largest |sigma| over the arc (0 with the flexure off) */
+    double flexure_location;   /* rad: arc angle of that section from the root C2 */
+    double contact_pressure;   /* Pa: Hertz peak pressure p0 of F_N (0 for F_N = 0) */
+    double contact_half_width; /* m: half-width b of the contact strip */
+} csfh_stresses_t;
+
+/* The flexure's largest stress at q (0 with the flexure off); *location (may be NULL) as in
+ * csfh_arc_stress_max. Pure: no counters, evaluated for outputs only, never in the RHS. */
+double csfh_model_flexure_stress(const csfh_model_t *m, const double q[3], double *location);
+
+/* The flexure stress at q and the contact pressure of the normal force F_N. Pure. */
+void csfh_model_stresses(const csfh_model_t *m, const double q[3], double F_N,
+                         csfh_stresses_t *s);
+
+/* Fill m->out (forces, gap, energies, stresses, peaks, margins) at the current state. */
 int csfh_model_outputs(csfh_model_t *m);
 
 #endif

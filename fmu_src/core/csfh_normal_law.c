@@ -1,6 +1,7 @@
 #include "csfh_normal_law.h"
 
 #include <math.h>
+#include <stddef.h>
 
 #include "csfh_common.h"
 
@@ -21,6 +22,27 @@ double csfh_stiffness_cylinders(double E1, double nu1, double E2, double nu2, do
 {
     const double E_star = 1.0 / (csfh_sigma(E1, nu1, 0) + csfh_sigma(E2, nu2, 0)); /* Eq. (17) */
     return 0.25 * CSFH_PI * E_star * L;                                            /* Eq. (16) */
+}
+
+double csfh_contact_modulus(double E1, double nu1, double E2, double nu2)
+{
+    return 1.0 / (csfh_sigma(E1, nu1, 0) + csfh_sigma(E2, nu2, 0)); /* Eq. (17) */
+}
+
+double csfh_hertz_line_pressure(double F_N, double E_star, double L, double R_eff,
+                                double *half_width)
+{
+    if (!(F_N > 0.0)) {
+        if (half_width != NULL) {
+            *half_width = 0.0;
+        }
+        return 0.0;
+    }
+    /* docs/model.md Eqs. (14.5)-(14.6): p0 = 2 F_N / (pi b L) */
+    if (half_width != NULL) {
+        *half_width = sqrt(4.0 * F_N * R_eff / (CSFH_PI * L * E_star));
+    }
+    return sqrt(F_N * E_star / (CSFH_PI * L * R_eff));
 }
 
 double csfh_damping_factor(csfh_contact_law_t law, double cr)

@@ -37,6 +37,17 @@ double csfh_stiffness_spheres(double E1, double nu1, double E2, double nu2, doub
 /* Cylinder stiffness (pi/4) E* L (Eqs. 16-17 times the contact length, PHYSICS.md 4.2), N/m. */
 double csfh_stiffness_cylinders(double E1, double nu1, double E2, double nu2, double L);
 
+/* Contact modulus E* of Eq. (17): 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (PHYSICS.md 4.2), Pa. */
+double csfh_contact_modulus(double E1, double nu1, double E2, double nu2);
+
+/* Hertz line contact of parallel cylinders along the length L under the normal force F_N
+ * (docs/model.md §14.3): the peak pressure p0 = sqrt(F_N E* / (pi L R')) [Pa], returned, and the
+ * half-width of the contact strip b = sqrt(4 F_N R' / (pi L E*)) [m] in *half_width (if not
+ * NULL); R' is the effective radius, for the pin in the bore 1/R' = 1/R1 - 1/R2. Both are 0 for
+ * F_N <= 0. */
+double csfh_hertz_line_pressure(double F_N, double E_star, double L, double R_eff,
+                                double *half_width);
+
 /* Damping factor xi (PHYSICS.md 4.4): LN 3(1 - cr^2)/4, Hunt-Crossley 3(1 - cr)/2,
  * Flores 8(1 - cr)/(5 cr); 0 for CSFH_CONTACTLAW_NONE. */
 double csfh_damping_factor(csfh_contact_law_t law, double cr);

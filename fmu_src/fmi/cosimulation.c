@@ -1065,6 +1065,17 @@ static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
         }
     }
     if (stepped) {
+        /* the previous CVODE step may reach into this part (it ended beyond the last
+         * communication point): take its maxima and its end there before the new step's
+         * analysis replaces them */
+        for (int m = 0; m < cv->peak_n_max; m++) {
+            if (cv->peak_max_t[m] > ta && cv->peak_max_t[m] <= tb) {
+                fmu_model.peaks_add(inst->model, cv->peak_max_v[m]);
+            }
+        }
+        if (cv->peak_slope_valid && cv->peak_t > ta && cv->peak_t <= tb) {
+            fmu_model.peaks_add(inst->model, cv->peak_end_v);
+        }
         const double tn = solver_time(cv);
         peak_step(inst, tb == tn ? N_VGetArrayPointer(cv->y) : NULL);
         if (cv->peak_slope_valid && tb == cv->peak_t) {

@@ -72,7 +72,9 @@ static int outputs(void *mv, char *msg, size_t msg_size)
     const csfh_outputs_t *o = &m->out;
     const double values[] = {o->F_N, o->F_T, o->indentation, o->gap, o->v_T,
                              o->indentation_rate, o->E_total, o->F_N_peak, o->F_T_peak,
-                             o->indentation_peak};
+                             o->indentation_peak, o->stress_max, o->stress_location,
+                             o->stress_max_peak, o->stress_margin, o->pressure_max,
+                             o->half_width, o->pressure_max_peak, o->pressure_margin};
     for (size_t i = 0; i < sizeof(values) / sizeof(values[0]); i++) {
         if (!isfinite(values[i])) {
             snprintf(msg, msg_size, "non-finite output at t = %.17g", m->time);
@@ -118,6 +120,7 @@ static void peaks_begin(void *mv, int outputs_current)
         m->peaks.v[0] = m->out.F_N;
         m->peaks.v[1] = fabs(m->out.F_T);
         m->peaks.v[2] = m->out.indentation;
+        m->peaks.v[3] = m->p.track_stress_peak ? m->out.stress_max : 0.0;
     } else {
         csfh_model_peak_values(m, m->x, m->peaks.v);
     }
@@ -141,10 +144,9 @@ static void peaks_state(void *m, const void *from)
     ((csfh_model_t *)m)->z = ((const csfh_model_t *)from)->z;
 }
 
-static int peaks_tracked(const void *mv)
+static int peaks_tracked(const void *m)
 {
-    const csfh_model_t *m = (const csfh_model_t *)mv;
-    return m->z.in_contact && m->p.law != CSFH_CONTACTLAW_NONE; /* as csfh_model_peak_values */
+    return csfh_model_peaks_tracked((const csfh_model_t *)m);
 }
 
 /* Restored FMU state: the fields that are not stored table variables (checked by the glue:
@@ -173,7 +175,8 @@ static int check_state(const void *mv, char *msg, size_t msg_size)
         return -1;
     }
     static const char *const peak_names[CSFH_N_PEAKS] = {"contact.F_N_peak", "contact.F_T_peak",
-                                                         "contact.indentation_peak"};
+                                                         "contact.indentation_peak",
+                                                         "flexure.stress_max_peak"};
     for (int j = 0; j < CSFH_N_PEAKS; j++) {
         if (!(isfinite(m->peaks.v[j]) && m->peaks.v[j] >= 0.0)) {
             snprintf(msg, msg_size, "%s (running peak) = %g is not finite and >= 0", peak_names[j],

@@ -66,7 +66,9 @@
 #define FAC_MIN_REPEATED 0.01  /* ... 100x after repeated rejections */
 #define MAX_ERR_FAILS 20       /* rejected attempts in a row before RK45_ERR_FAILURE */
 #define MAX_RHS_FAILS 10       /* recoverable f failures in a row before RK45_RHS_FAILURE */
-#define STABILITY_BOUNDARY 3.25 /* |h lambda| on the negative real axis (DP5: ~3.3) */
+#define STIFF_H_LAMBDA 2.5   /* h |lambda| flagged as held by stability: within 25 % of the
+                                stability boundary (DP5: 3.3 on the negative real axis); a
+                                step that accuracy sets is far shorter */
 
 struct rk45 {
     int n, n_roots;
@@ -634,7 +636,7 @@ int rk45_step(rk45_t *r, double *t, double *y)
         num += (k7[i] - k6[i]) * (k7[i] - k6[i]);
         den += (yn[i] - ys[i]) * (yn[i] - ys[i]);
     }
-    if (den > 0.0 && h * h * num > STABILITY_BOUNDARY * STABILITY_BOUNDARY * den) {
+    if (den > 0.0 && h * h * num > STIFF_H_LAMBDA * STIFF_H_LAMBDA * den) {
         r->stats.stiff++;
     }
     /* the next step's size: PI control */

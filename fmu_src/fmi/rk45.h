@@ -39,8 +39,9 @@ typedef struct {
     long fails;      /* rejected attempts (error test or recoverable f failure) */
     long rhs;        /* evaluations of f */
     long roots;      /* evaluations of g */
-    long stiff;      /* accepted steps whose h |lambda| estimate lies beyond 3.25, i.e. at the
-                        stability boundary of the method (stiffness indicator) */
+    long stiff;      /* accepted steps whose h |lambda| estimate (from the last two stages) lies
+                        beyond 2.5, near the method's stability boundary 3.3: steps held by
+                        stability rather than accuracy (stiffness indicator) */
 } rk45_stats_t;
 
 typedef struct rk45 rk45_t;

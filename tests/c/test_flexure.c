@@ -611,6 +611,102 @@ static void test_loop_work(void)
     (void)Emax1;
 }
 
+
+/* ---------------------------------------------------------------------------------------- */
+/* (i) stresses along the arc (docs/model.md §14.2). Independent oracle: the arc in GLOBAL
+ * coordinates (as castigliano_global), the internal forces at many sections from the equilibrium
+ * of the free part between the section and the tip (N = F . tau, m = M + (C1 - P) x F), the
+ * outer-fibre stress |N|/(b h) + 6|m|/(b h^2) maximised by brute force. */
+static double brute_force_stress(double rho, double beta, double phi_root, double h, double b,
+                                 const double w[3], int nsec, double *location)
+{
+    const double phi_tip = phi_root + beta;
+    const double tip[2] = {rho * cos(phi_tip), rho * sin(phi_tip)};
+    double best = -1.0;
+    for (int k = 0; k <= nsec; k++) {
+        const double phi = phi_root + beta * k / nsec; /* k = 0: root */
+        const double P[2] = {rho * cos(phi), rho * sin(phi)};
+        const double tau[2] = {-sin(phi), cos(phi)};
+        const double d[2] = {tip[0] - P[0], tip[1] - P[1]};
+        const double N = w[0] * tau[0] + w[1] * tau[1];
+        const double m = w[2] + d[0] * w[1] - d[1] * w[0];
+        const double sigma = fabs(N) / (b * h) + 6.0 * fabs(m) / (b * h * h);
+        if (sigma > best) {
+            best = sigma;
+            *location = phi - phi_root;
+        }
+    }
+    return best;
+}
+
+static void test_arc_stress(void)
+{
+    /* random wrenches on four arcs: Table 1, a short arc, a half circle, and beta > 3 pi/2 with
+     * another root angle */
+    const double arcs[4][3] = {{RHO, BETA, 0.0}, {0.05, 0.7, 1.0}, {0.1, TEST_PI, -2.0},
+                               {0.02, 5.9, 2.5}};
+    const int nsec = 200000;
+    for (int a = 0; a < 4; a++) {
+        const csfh_arc_beam_t beam = {arcs[a][0], arcs[a][1], EH, NUH, HH, BB, KAPPA, 0};
+        csfh_arc_section_t sec;
+        csfh_arc_section_setup(&beam, arcs[a][2], &sec);
+        for (int trial = 0; trial < 25; trial++) {
+            const double w[3] = {test_uniform(-100.0, 100.0), test_uniform(-100.0, 100.0),
+                                 test_uniform(-20.0, 20.0) * beam.rho};
+            double loc = -1.0, loc_ref = -1.0;
+            const double sigma = csfh_arc_stress_max(&sec, w, &loc);
+            const double ref = brute_force_stress(beam.rho, beam.beta, arcs[a][2], HH, BB, w, nsec,
+                                                  &loc_ref);
+            /* the brute force misses the maximum by at most a quadratic in the section spacing
+             * (the function is smooth at an interior maximum, exact at the ends) */
+            const double dphi = beam.beta / nsec;
+            CHECK_TRUE(sigma >= ref * (1.0 - 1e-13),
+                       TFMT("arc %d trial %d: closed form >= brute force", a, trial));
+            CHECK_CLOSE(sigma, ref, 2.0 * dphi * dphi + 1e-13,
+                        TFMT("arc %d trial %d: sigma_max = brute force", a, trial));
+            CHECK_ABS(loc, loc_ref, 1e-3 * beam.beta + dphi,
+                      TFMT("arc %d trial %d: location from the root", a, trial));
+        }
+    }
+    const csfh_arc_beam_t beam = table1_beam(0);
+    csfh_arc_section_t sec;
+    csfh_arc_section_setup(&beam, 0.0, &sec);
+    const double A = BB * HH, Z = BB * HH * HH / 6.0;
+    double loc = -1.0;
+    /* a pure moment bends every section equally: the root is reported */
+    const double wM[3] = {0.0, 0.0, 3.0};
+    CHECK_CLOSE(csfh_arc_stress_max(&sec, wM, &loc), 3.0 / Z, 1e-15, "pure moment: 6 M / (b h^2)");
+    CHECK_ABS(loc, 0.0, 0.0, "pure moment: the root (first of equal maxima)");
+    /* a tip force along the tip tangent n: N = F cos(alpha), m = rho (1 - cos(alpha)) F, the
+     * largest at alpha = pi (N = -F, m = 2 rho F), i.e. beta - pi from the root */
+    const double psi = BETA + 0.5 * TEST_PI;
+    const double F = 40.0, wn[3] = {F * cos(psi), F * sin(psi), 0.0};
+    CHECK_CLOSE(csfh_arc_stress_max(&sec, wn, &loc), F / A + 2.0 * RHO * F / Z, 1e-13,
+                "tip force along n: F/A + 2 rho F/Z at alpha = pi");
+    CHECK_ABS(loc, BETA - TEST_PI, 1e-14, "tip force along n: location beta - pi");
+    /* zero wrench: zero stress */
+    const double w0[3] = {0.0, 0.0, 0.0};
+    CHECK_ABS(csfh_arc_stress_max(&sec, w0, &loc), 0.0, 0.0, "no load: no stress");
+    /* the tip wrench is the wrench of the elastic force: Q = -[F, s x F + M] with F, M global */
+    for (int conservative = 0; conservative <= 1; conservative++) {
+        csfh_flexure_t flex;
+        csfh_flexure_setup(&beam, OF, 0.0, conservative, &flex);
+        const double q[3] = {0.004, -0.007, 0.03};
+        double Q[3], w[3];
+        csfh_flexure_force(&flex, q, Q);
+        csfh_flexure_tip_wrench(&flex, q, w);
+        const double c = cos(q[2]), s = sin(q[2]);
+        /* co-rotated: body-frame components; conservative: global */
+        const double wg[3] = {conservative ? w[0] : c * w[0] - s * w[1],
+                              conservative ? w[1] : s * w[0] + c * w[1], w[2]};
+        const double sg[2] = {c * flex.sbar[0] - s * flex.sbar[1], s * flex.sbar[0] + c * flex.sbar[1]};
+        CHECK_CLOSE(-Q[0], wg[0], 1e-13, TFMT("conservative %d: tip wrench F_x", conservative));
+        CHECK_CLOSE(-Q[1], wg[1], 1e-13, TFMT("conservative %d: tip wrench F_y", conservative));
+        CHECK_CLOSE(-Q[2], sg[0] * wg[1] - sg[1] * wg[0] + wg[2], 1e-13,
+                    TFMT("conservative %d: tip wrench moment", conservative));
+    }
+}
+
 int main(void)
 {
     test_compliance_table1();
@@ -621,5 +717,6 @@ int main(void)
     test_linearization();
     test_conservative_gradient();
     test_loop_work();
+    test_arc_stress();
     return TEST_SUMMARY();
 }

@@ -660,6 +660,144 @@ static void test_start_check_peaks_and_numbers(void)
     CHECK_STR_CONTAINS(msg, "contact.law_number", "names the number");
 }
 
+/* ---------------------------------------------------------------------------------------- */
+/* Each law's force in the model at one state (PHYSICS.md 4.1-4.4): the stiffness the law uses
+ * (spheres for LN_spheres, Hunt-Crossley and Flores; cylinders for LN_cylinders), computed here
+ * from the materials (Eq. 14 external radius, Eq. 16 times L), and its damping factor (4.6):
+ * F_N = K rho^n (1 + xi rho'/rho'-) at the bottom of the bore, in contact mode. */
+static void test_each_law_uses_its_stiffness(void)
+{
+    const double E = 210e9, nu = 0.3, R1 = 0.18, R2 = 0.20, L = 0.025, cr = 0.9;
+    const double sigma = (1.0 - nu * nu) / E;
+    const double K_sph = 4.0 / (3.0 * 2.0 * sigma) * sqrt(R1 * R2 / (R1 + R2));
+    const double K_cyl = 0.25 * TEST_PI / (2.0 * sigma) * L;
+    const struct {
+        int law;
+        const char *name;
+        double K, xi;
+    } cases[] = {
+        {CSFH_CONTACTLAW_LN_SPHERES, "LN_spheres", K_sph, 0.75 * (1.0 - cr * cr)},
+        {CSFH_CONTACTLAW_LN_CYLINDERS, "LN_cylinders", K_cyl, 0.75 * (1.0 - cr * cr)},
+        {CSFH_CONTACTLAW_HUNTCROSSLEY, "HuntCrossley", K_sph, 1.5 * (1.0 - cr)},
+        {CSFH_CONTACTLAW_FLORES, "Flores", K_sph, 8.0 * (1.0 - cr) / (5.0 * cr)},
+    };
+    for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+        csfh_model_t m;
+        char msg[MSG_SIZE] = "";
+        csfh_model_set_defaults(&m);
+        m.p.law = cases[i].law;
+        m.p.flexure_enabled = 0;
+        m.p.friction_enabled = 0;
+        CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, TFMT("%s: prepare", cases[i].name));
+        CHECK_CLOSE(m.d.normal.K, cases[i].K, 1e-13, TFMT("%s: stiffness in use", cases[i].name));
+        const double rho = 2e-5, v = 0.4, onset = 0.8;
+        const double delta = m.d.delta;
+        const double x[6] = {0.0, -(delta + rho), 0.0, 0.0, -v, 0.0};
+        const double rho_seen = (delta + rho) - delta; /* the rounding of delta + rho */
+        m.z.in_contact = 1;
+        m.z.onset_speed = onset;
+        csfh_contact_eval_t c;
+        csfh_model_contact(&m, x, x + 3, &c);
+        CHECK_CLOSE(c.F_N, cases[i].K * pow(rho_seen, 1.5) * (1.0 + cases[i].xi * v / onset), 1e-12,
+                    TFMT("%s: F_N = K rho^1.5 (1 + xi rho'/rho'-)", cases[i].name));
+    }
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* base acceleration (docs/model.md §14.1) and the stress outputs (§14.2-14.5) */
+static void test_base_acceleration_and_stresses(void)
+{
+    csfh_model_t m, f;
+    setup_default(&m);
+    /* a state in contact, sliding, with the flexure loaded */
+    const double x[6] = {0.5 * 0.02005, -0.8660254 * 0.02005, 0.01, 0.05, -0.02, 0.3};
+    m.z.in_contact = 1;
+    m.z.onset_speed = 0.5;
+    double ref[6], xdot[6], xf[6];
+    csfh_model_derivatives(&m, x, ref);
+    /* a_base = 0 (the default) is bitwise the model without it: the values of a model whose
+     * a_base was never touched, and x - 0 = x in every sum */
+    CHECK_TRUE(m.a_base[0] == 0.0 && m.a_base[1] == 0.0, "a_base starts at 0");
+    /* body 1 feels -m1 a_base at G1: bitwise the same as F_ext = -m1 a_base */
+    f = m;
+    m.a_base[0] = 3000.0;
+    m.a_base[1] = -1234.5;
+    f.u_in[0] = -m.p.m1 * m.a_base[0];
+    f.u_in[1] = -m.p.m1 * m.a_base[1];
+    csfh_model_derivatives(&m, x, xdot);
+    csfh_model_derivatives(&f, x, xf);
+    CHECK_TRUE(memcmp(xdot, xf, sizeof(xdot)) == 0, "a_base is bitwise F_ext = -m1 a_base");
+    CHECK_CLOSE(xdot[3], ref[3] - 3000.0, 1e-12, "a_base[1] decelerates body 1 along X");
+    CHECK_CLOSE(xdot[4], ref[4] + 1234.5, 1e-12, "a_base[2] < 0 accelerates body 1 along +Y");
+    CHECK_ABS(xdot[5], ref[5], 0.0, "the d'Alembert force acts at G1: no moment");
+    /* the same smooth forces serve the Moreau stepper and the RK4 baseline */
+    double Q[3];
+    csfh_model_smooth_forces(&m, x, Q);
+    double Q0[3];
+    m.a_base[0] = m.a_base[1] = 0.0;
+    csfh_model_smooth_forces(&m, x, Q0);
+    CHECK_CLOSE(Q[0], Q0[0] - m.p.m1 * 3000.0, 1e-14, "smooth forces: -m1 a_base, X");
+    CHECK_CLOSE(Q[1], Q0[1] + m.p.m1 * 1234.5, 1e-14, "smooth forces: -m1 a_base, Y");
+    csfh_model_derivatives(&m, x, xdot);
+    CHECK_TRUE(memcmp(xdot, ref, sizeof(xdot)) == 0, "a_base back to 0: bitwise as before");
+
+    /* outputs: stresses at the state, the pure functions' values */
+    m.time = 0.0;
+    memcpy(m.x, x, sizeof(m.x));
+    const int rhs_before = m.counters.rhs;
+    csfh_model_outputs(&m);
+    CHECK_INT(m.counters.rhs, rhs_before, "outputs evaluate no right-hand side");
+    double w[3], loc = -1.0;
+    csfh_flexure_tip_wrench(&m.d.flexure, x, w);
+    const double sigma = csfh_arc_stress_max(&m.d.arc, w, &loc);
+    CHECK_ABS(m.out.stress_max, sigma, 0.0, "flexure.stress_max from the tip wrench");
+    CHECK_ABS(m.out.stress_location, loc, 0.0, "flexure.stress_location");
+    CHECK_TRUE(m.out.stress_max > 0.0, "the flexure is loaded");
+    const double E_star = 1.0 / (2.0 * (1.0 - 0.3 * 0.3) / 210e9), Rc = 0.18 * 0.2 / 0.02;
+    const double p0 = sqrt(m.out.F_N * E_star / (TEST_PI * 0.025 * Rc));
+    CHECK_TRUE(m.out.F_N > 0.0, "in contact");
+    CHECK_CLOSE(m.out.pressure_max, p0, 1e-14, "contact.pressure_max = sqrt(F_N E*/(pi L R'))");
+    CHECK_CLOSE(m.out.half_width, 2.0 * m.out.F_N / (TEST_PI * p0 * 0.025), 1e-14,
+                "contact.half_width = 2 F_N/(pi p0 L)");
+    CHECK_ABS(m.out.stress_max_peak, m.out.stress_max, 0.0, "no step: the peak is the value");
+    CHECK_ABS(m.out.pressure_max_peak, m.out.pressure_max, 0.0, "no step: the peak is the value");
+    CHECK_CLOSE(m.out.stress_margin, 1.0 - sigma / m.p.stress_allowable, 1e-15,
+                "flexure.stress_margin = 1 - sigma/allowable");
+    CHECK_CLOSE(m.out.pressure_margin, 1.0 - p0 / m.p.pressure_allowable, 1e-14,
+                "contact.pressure_margin = 1 - p0/allowable");
+    /* peaks over a step: the contact ones always, the flexure stress only when tracked */
+    m.peaks.active = 1;
+    m.peaks.v[0] = 4.0 * m.out.F_N;
+    m.peaks.v[3] = 3.0 * sigma;
+    csfh_model_outputs(&m);
+    CHECK_CLOSE(m.out.pressure_max_peak, 2.0 * p0, 1e-14, "pressure peak = p0(F_N_peak)");
+    CHECK_ABS(m.out.stress_max_peak, sigma, 0.0, "untracked stress peak: the value");
+    m.p.track_stress_peak = 1;
+    csfh_model_outputs(&m);
+    CHECK_ABS(m.out.stress_max_peak, 3.0 * sigma, 0.0, "tracked stress peak");
+    CHECK_CLOSE(m.out.stress_margin, 1.0 - 3.0 * sigma / m.p.stress_allowable, 1e-15,
+                "the margin of the peak");
+    double v[CSFH_N_PEAKS];
+    m.z.in_contact = 0;
+    CHECK_INT(csfh_model_peak_values(&m, x, v), 1, "tracked stress: evaluated in flight too");
+    CHECK_ABS(v[3], sigma, 0.0, "peak quantity 3 is the flexure stress");
+    m.peaks.active = 0;
+    m.p.track_stress_peak = 0;
+    /* zero stress: finite margins of 1; flexure off: no stress, no flexure evaluation */
+    setup_default(&m);
+    m.p.flexure_enabled = 0;
+    const double x0[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    memcpy(m.x, x0, sizeof(m.x));
+    const int flex_before = m.counters.flexure;
+    csfh_model_outputs(&m);
+    CHECK_INT(m.counters.flexure, flex_before, "flexure off: never evaluated");
+    CHECK_ABS(m.out.stress_max, 0.0, 0.0, "flexure off: no stress");
+    CHECK_ABS(m.out.pressure_max, 0.0, 0.0, "out of contact: no pressure");
+    CHECK_ABS(m.out.half_width, 0.0, 0.0, "out of contact: no strip");
+    CHECK_ABS(m.out.stress_margin, 1.0, 0.0, "zero stress: margin 1");
+    CHECK_ABS(m.out.pressure_margin, 1.0, 0.0, "zero pressure: margin 1");
+}
+
 int main(void)
 {
     test_defaults_prepare();
@@ -669,5 +807,7 @@ int main(void)
     test_events();
     test_energy_conservation();
     test_start_check_peaks_and_numbers();
+    test_each_law_uses_its_stiffness();
+    test_base_acceleration_and_stresses();
     return TEST_SUMMARY();
 }

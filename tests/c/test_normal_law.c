@@ -560,6 +560,67 @@ static void test_clamp_and_floor(void)
     CHECK_CLOSE(F, Fel, 1e-15, "zero rate: F_N = F_el");
 }
 
+
+/* (i) Hertz line contact (docs/model.md §14.3). Oracle: the two conditions that define the
+ * Hertz strip, checked numerically on the returned p0 and b with the semi-elliptic pressure
+ * p(x) = p0 sqrt(1 - x^2/b^2): (1) force balance, L int p dx = F_N (quadrature); (2) contact
+ * compatibility, the combined surface slope of two elastic half-planes under p,
+ * (2 / (pi E*)) PV int p(s) / (x - s) ds, equals the slope x / R' of the initial separation
+ * x^2 / (2 R') inside the strip (principal value by subtracting the singularity). */
+static double strip_slope(double p0, double b, double E_star, double x)
+{
+    const int n = 20000;
+    const double fx = sqrt(1.0 - x * x / (b * b));
+    double I = 0.0; /* int (f(s) - f(x)) / (x - s) ds with s = b sin t */
+    for (int k = 0; k < n; k++) {
+        const double t = -0.5 * TEST_PI + TEST_PI * (k + 0.5) / n;
+        const double sk = b * sin(t);
+        I += (cos(t) - fx) / (x - sk) * b * cos(t);
+    }
+    I *= TEST_PI / n;
+    I += fx * log((x + b) / (b - x)); /* PV int ds / (x - s) */
+    return 2.0 / (TEST_PI * E_star) * p0 * I;
+}
+
+static void test_hertz_line_contact(void)
+{
+    const double E1 = 169e9, nu1 = 0.22, E2 = 210e9, nu2 = 0.3, L = 0.025;
+    const double E_star = 1.0 / ((1.0 - nu1 * nu1) / E1 + (1.0 - nu2 * nu2) / E2);
+    CHECK_CLOSE(csfh_contact_modulus(E1, nu1, E2, nu2), E_star, 1e-15, "E* of Eq. (17)");
+    const double Rc = R1 * R2 / (R2 - R1); /* 1/R' = 1/R1 - 1/R2 */
+    const double forces[] = {1e-3, 1.0, 2.0e3, 4.8e4};
+    for (size_t i = 0; i < sizeof(forces) / sizeof(forces[0]); i++) {
+        const double F = forces[i];
+        double b = -1.0;
+        const double p0 = csfh_hertz_line_pressure(F, E_star, L, Rc, &b);
+        /* (1) force balance by the midpoint rule in x = b sin t */
+        const int n = 4000;
+        double Fq = 0.0;
+        for (int k = 0; k < n; k++) {
+            const double t = -0.5 * TEST_PI + TEST_PI * (k + 0.5) / n;
+            Fq += p0 * cos(t) * b * cos(t);
+        }
+        Fq *= L * TEST_PI / n;
+        CHECK_CLOSE(Fq, F, 1e-9, TFMT("F = %g N: L int p dx = F_N", F));
+        /* (2) compatibility at three points inside the strip */
+        for (int j = 1; j <= 3; j++) {
+            const double x = b * (0.23 * j);
+            CHECK_CLOSE(strip_slope(p0, b, E_star, x), x / Rc, 1e-6,
+                        TFMT("F = %g N: surface slope = x / R' at x = %.2f b", F, 0.23 * j));
+        }
+        CHECK_CLOSE(p0, 2.0 * F / (TEST_PI * b * L), 1e-14, TFMT("F = %g N: p0 = 2 F/(pi b L)", F));
+        CHECK_CLOSE(csfh_hertz_line_pressure(4.0 * F, E_star, L, Rc, NULL), 2.0 * p0, 1e-14,
+                    TFMT("F = %g N: p0 grows as sqrt(F)", F));
+    }
+    /* out of contact: zero, and no NaN for a negative force */
+    double b = -1.0;
+    CHECK_ABS(csfh_hertz_line_pressure(0.0, E_star, L, Rc, &b), 0.0, 0.0, "F = 0: p0 = 0");
+    CHECK_ABS(b, 0.0, 0.0, "F = 0: b = 0");
+    b = -1.0;
+    CHECK_ABS(csfh_hertz_line_pressure(-5.0, E_star, L, Rc, &b), 0.0, 0.0, "F < 0: p0 = 0");
+    CHECK_ABS(b, 0.0, 0.0, "F < 0: b = 0");
+}
+
 int main(void)
 {
     test_stiffness();
@@ -570,5 +631,6 @@ int main(void)
     test_esdu();
     test_elastic_energy();
     test_clamp_and_floor();
+    test_hertz_line_contact();
     return TEST_SUMMARY();
 }

@@ -64,10 +64,10 @@ OLD, NEW = SPEC + ".md", "docs/model.md " + "\u00a7"
 
 def test_a_wrong_citation_is_found(tmp_path: Path) -> None:
     bad = tmp_path / "x.c"
-    bad.write_text(f"/* {NEW}4.9, {OLD} 14.2, {OLD} 4.6 */\n", encoding="utf-8")
+    bad.write_text(f"/* {NEW}4.9, {OLD} 41.2, {OLD} 4.6 */\n", encoding="utf-8")
     problems = model_citations.check([bad])
     assert len(problems) == 2
-    assert {"\u00a74.9", "\u00a714.2"} == {p.split(" is not")[0].split(": ")[-1] for p in problems}
+    assert {"\u00a74.9", "\u00a741.2"} == {p.split(" is not")[0].split(": ")[-1] for p in problems}
 
 
 def test_rewrite_maps_old_citations_to_the_same_numbers(tmp_path: Path) -> None:

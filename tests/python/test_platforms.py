@@ -22,8 +22,7 @@ import fmpy
 import pytest
 from fmpy.model_description import ModelDescription
 
-from csfh import load_scene
-from csfh.model.scene import Scene
+from csfh import Scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 BUILD = ROOT / "build"

@@ -12,7 +12,7 @@ import textwrap
 from pathlib import Path
 from typing import Any
 
-SCENE_HELP = "built-in scene (central, asymmetric, csfh) or the path of a .toml scene file"
+SCENE_HELP = "built-in scene (central, asymmetric, csfh, mems) or the path of a .toml scene file"
 
 
 class CliError(Exception):

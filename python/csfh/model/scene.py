@@ -18,8 +18,8 @@ the model are on, parameter overrides, constant inputs and integrator settings.
     [parameters]                # any FMU parameter by name (enumerations by item name)
     "contact.cr" = 0.9
 
-    [inputs]                    # constant actuator inputs
-    "F_ext[1]" = 0.0
+    [inputs]                    # constant inputs
+    "F_ext[1]" = 0.0            # also F_ext[2], M_ext, a_base[1], a_base[2] (frame acceleration)
 
     [integrator]
     rtol = 1e-6                 # CVode relative tolerance (event-driven models)
@@ -47,7 +47,7 @@ from . import model_info
 from .cosim_section import parse_cosim
 from .presets import PRESETS
 
-BUILTIN_SCENES = ("central", "asymmetric", "csfh", "combdrive")  # combdrive: `csfh cosim`
+BUILTIN_SCENES = ("central", "asymmetric", "csfh", "mems", "combdrive")  # combdrive: `csfh cosim`
 STICK_RULES = ("paper", "memory")
 
 
@@ -84,7 +84,8 @@ class Scene:
     * ``q0``, ``u0``: initial x [m], y [m], theta [rad] of G1 relative to O2, and their rates.
     * ``flexure``, ``friction``: whether those parts of the model are on.
     * ``parameters``: FMU parameters by name, applied after the preset's.
-    * ``inputs``: constant values of ``F_ext[1]``, ``F_ext[2]``, ``M_ext``.
+    * ``inputs``: constant values of ``F_ext[1]``, ``F_ext[2]``, ``M_ext``, ``a_base[1]``,
+      ``a_base[2]`` (the frame's acceleration, docs/model.md §14.1).
     * ``models``: the models of ``csfh compare`` on this scene.
     * ``cosim``: the raw ``[cosim]`` table (validated by :func:`cosimulate`).
     """
@@ -144,7 +145,7 @@ _TOP_KEYS = {
     "models",
     "cosim",
 }
-_INPUTS = ("F_ext[1]", "F_ext[2]", "M_ext")
+_INPUTS = ("F_ext[1]", "F_ext[2]", "M_ext", "a_base[1]", "a_base[2]")
 
 
 def _number(where: str, value: Any, positive: bool = False, nonnegative: bool = False) -> float:
@@ -291,8 +292,8 @@ def _check_values(scene: Scene) -> None:
 
 
 def load_scene(scene: str | Path) -> Scene:
-    """A built-in scene by name (``central``, ``asymmetric``, ``csfh``, ``combdrive``) or a
-    scene file by path. Raises :class:`SceneError` with a one-line message naming the file, the
+    """A built-in scene by name (``central``, ``asymmetric``, ``csfh``, ``mems``, ``combdrive``) or
+    a scene file by path. Raises :class:`SceneError` with a one-line message naming the file, the
     key and the value when the scene cannot be used."""
     path = Path(scene)
     if path.suffix == ".toml" or path.exists():

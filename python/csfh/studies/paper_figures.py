@@ -72,8 +72,9 @@ def _force_axis(ax: Axes, runs: Sequence[Trajectory], column: str, ylabel: str) 
         ax.plot(tr.t, y, lw=0.9, **_style(tr))
     if has_moreau:
         ax.set_yscale("log")
-        top = max(float(np.max(np.abs(tr[column]), initial=1.0)) for tr in runs)
-        ax.set_ylim(max(top * 1e-5, 1e-1), top * 3)
+        # five decades below the largest force, whatever the scale (mN at MEMS scale)
+        top = max(float(np.max(np.abs(tr[column]), initial=0.0)) for tr in runs)
+        ax.set_ylim(top * 1e-5, top * 3)
         ax.set_ylabel(ylabel.replace("[N]", "| [N] (log)").replace("$F", "|$F"))
     else:
         ax.set_ylabel(ylabel)
