@@ -48,8 +48,9 @@
  * but when they are read (fmi2GetReal, fmu_update_outputs), the event message is formatted only
  * when logEvents is on, and the peak outputs cost nothing outside the contact mode.
  *
- * The integrator logic below (solver_*, auto_decide, the peak analysis) uses no FMI types; only
- * cs_do_step, the logging and the instance are FMI-specific.
+ * FMI types: rk45.c and auto_decide use none; the solver_* wrappers, the peak analysis and
+ * cs_do_step use the instance (fmu_instance.h: the model, the log, the integrator) and
+ * fmi2Status only as their result, so an FMI 3.0 glue can keep them by mapping the status.
  *
  * A model without continuous states (the comb-drive actuator) just advances its time. */
 #include <float.h>
