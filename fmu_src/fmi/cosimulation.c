@@ -152,9 +152,9 @@ struct csfh_cvode {
     double comm_start;        /* the communication step being taken: (comm_start, FMU time] */
     peak_record_t *log;       /* the steps that may still hold peaks of it, in order */
     double *log_data;         /* their RK45 records (RK45_RECORD_SIZE(NX) each) */
-    int log_n;
+    int log_n, log_cap;       /* (allocated as needed, up to PEAK_LOG_MAX) */
     unsigned char *snap;      /* copies of the model, for the discrete state each step ran with */
-    int snap_n;
+    int snap_n, snap_cap;     /* (up to PEAK_SNAPSHOTS) */
     int snap_stale;           /* the discrete state changed since the last copy */
     void *scratch;            /* the model's own discrete state while analysing */
     double origin;      /* s: the integrator's time 0 (see the top of this file); its times are local */
@@ -981,17 +981,33 @@ static int peak_log_keep(fmu_instance_t *inst, double t_now)
     if (fmu_model.peaks_state == NULL) {
         return 0;
     }
-    if (cv->log == NULL) {
-        cv->log = (peak_record_t *)calloc(PEAK_LOG_MAX, sizeof(peak_record_t));
-        cv->log_data = (double *)calloc(PEAK_LOG_MAX * RK45_RECORD_SIZE(NX), sizeof(double));
-        cv->snap = (unsigned char *)calloc(PEAK_SNAPSHOTS, fmu_model.size);
-        cv->scratch = calloc(1, fmu_model.size);
-        if (cv->log == NULL || cv->log_data == NULL || cv->snap == NULL || cv->scratch == NULL) {
-            free(cv->log), free(cv->log_data), free(cv->snap), free(cv->scratch);
-            cv->log = NULL, cv->log_data = NULL, cv->snap = NULL, cv->scratch = NULL;
+    /* room, allocated as needed (nothing is zeroed: a restart from outside frees nothing) */
+    if (cv->scratch == NULL && (cv->scratch = malloc(fmu_model.size)) == NULL) {
+        return 0;
+    }
+    if (cv->log_n == cv->log_cap && cv->log_cap < PEAK_LOG_MAX) {
+        const int cap = cv->log_cap > 0 ? 2 * cv->log_cap : 8;
+        peak_record_t *log = (peak_record_t *)realloc(cv->log, (size_t)cap * sizeof(*log));
+        if (log == NULL) {
             return 0;
         }
-        peak_log_clear(cv);
+        cv->log = log;
+        double *data =
+            (double *)realloc(cv->log_data, (size_t)cap * RK45_RECORD_SIZE(NX) * sizeof(double));
+        if (data == NULL) {
+            return 0;
+        }
+        cv->log_data = data;
+        cv->log_cap = cap;
+    }
+    if (cv->snap_stale && cv->snap_n == cv->snap_cap && cv->snap_cap < PEAK_SNAPSHOTS) {
+        const int cap = cv->snap_cap > 0 ? 2 * cv->snap_cap : 2;
+        unsigned char *snap = (unsigned char *)realloc(cv->snap, (size_t)cap * fmu_model.size);
+        if (snap == NULL) {
+            return 0;
+        }
+        cv->snap = snap;
+        cv->snap_cap = cap;
     }
     if (cv->log_n == PEAK_LOG_MAX || (cv->snap_stale && cv->snap_n == PEAK_SNAPSHOTS)) {
         /* piled up in this communication step: analyse them now, keep the last (its end
