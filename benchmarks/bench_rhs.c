@@ -83,7 +83,7 @@ int main(void)
             if (kind[c] == KIND_RHS) {
                 for (int k = 0; k < CALLS; k++) {
                     xs[c][5] += 1e-12; /* defeat hoisting */
-                    csfh_model_derivatives(&models[c], xs[c], xdot);
+                    csfh_model_derivatives(&models[c], 0.0, xs[c], xdot);
                     sink += xdot[3];
                 }
             } else if (kind[c] == KIND_STRESSES) {

@@ -80,8 +80,7 @@ typedef struct {
 /* ---- our RK45 ---------------------------------------------------------------------------- */
 static int rk_f(double t, const double *y, double *ydot, void *m)
 {
-    (void)t;
-    return csfh_model_derivatives(m, y, ydot) < 0;
+    return csfh_model_derivatives(m, t, y, ydot) < 0;
 }
 
 static int rk_g(double t, const double *y, double *g, void *m)
@@ -147,8 +146,7 @@ static SUNContext ctx;
 
 static int ark_f(double t, N_Vector y, N_Vector ydot, void *m)
 {
-    (void)t;
-    return csfh_model_derivatives(m, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot)) < 0;
+    return csfh_model_derivatives(m, t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot)) < 0;
 }
 
 static int ark_g(double t, N_Vector y, double *g, void *m)

@@ -92,7 +92,7 @@ int csfh_api_get(csfh_model_t *m, const char *name, double *value)
     }
     if (v->storage == CSFH_STORE_COMPUTED) {
         csfh_model_outputs(m);
-        csfh_model_derivatives(m, m->x, m->der);
+        csfh_model_derivatives(m, m->time, m->x, m->der);
     }
     *value = v->type == CSFH_TYPE_REAL ? *csfh_variable_real(m, v) : (double)*csfh_variable_int(m, v);
     return 0;
@@ -125,12 +125,12 @@ void csfh_api_set_inputs(csfh_model_t *m, const double u[3])
 
 int csfh_api_derivatives(csfh_model_t *m, const double x[6], double xdot[6])
 {
-    return csfh_model_derivatives(m, x, xdot);
+    return csfh_model_derivatives(m, m->time, x, xdot);
 }
 
 void csfh_api_smooth_forces(csfh_model_t *m, const double q[3], double Q[3])
 {
-    csfh_model_smooth_forces(m, q, Q);
+    csfh_model_smooth_forces(m, m->time, q, Q);
 }
 
 double csfh_api_event_indicator(const csfh_model_t *m, const double x[6])

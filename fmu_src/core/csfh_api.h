@@ -53,9 +53,10 @@ CSFH_API void csfh_api_set_state(csfh_model_t *m, const double x[6]);
 CSFH_API void csfh_api_get_state(const csfh_model_t *m, double x[6]);
 CSFH_API void csfh_api_set_inputs(csfh_model_t *m, const double u[3]);
 
-/* f(x) with the model's current discrete state and inputs; returns csfh_model_derivatives'. */
+/* f(t, x) at the model's time t = m->time (the shock pulse) with its current discrete state and
+ * inputs; returns csfh_model_derivatives'. */
 CSFH_API int csfh_api_derivatives(csfh_model_t *m, const double x[6], double xdot[6]);
-/* Smooth generalized forces (gravity + inputs + flexure) at q. */
+/* Smooth generalized forces (gravity + inputs + base acceleration + flexure) at q and m->time. */
 CSFH_API void csfh_api_smooth_forces(csfh_model_t *m, const double q[3], double Q[3]);
 CSFH_API double csfh_api_event_indicator(const csfh_model_t *m, const double x[6]);
 CSFH_API int csfh_api_event_update(csfh_model_t *m);

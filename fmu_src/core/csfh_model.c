@@ -77,6 +77,36 @@ static int check_all_values(csfh_model_t *m, char *msg, size_t msg_size)
     return 0;
 }
 
+/* A derived quantity, by the name of its variable, and what it is derived from (for the message
+ * when it is not finite). */
+typedef struct {
+    const char *name;
+    double value;
+    const char *const *from; /* NULL-terminated variable names */
+} derived_check_t;
+
+/* "contact.esdu_F_max = inf is not finite (derived from contact.E1 = 1e+308, ...)" */
+static void derived_not_finite(csfh_model_t *m, const derived_check_t *q, char *msg,
+                               size_t msg_size)
+{
+    char b[32];
+    int n = snprintf(msg, msg_size, "%s = %s is not finite (derived from ", q->name,
+                     csfh_format_value(b, q->value));
+    for (const char *const *name = q->from; *name != NULL; name++) {
+        const csfh_variable_t *v = csfh_variable_by_name(*name);
+        const double value = v == NULL                    ? NAN
+                             : v->type == CSFH_TYPE_REAL ? *csfh_variable_real(m, v)
+                                                         : (double)*csfh_variable_int(m, v);
+        if (n >= 0 && (size_t)n < msg_size) {
+            n += snprintf(msg + n, msg_size - (size_t)n, "%s%s = %s", name == q->from ? "" : ", ",
+                          *name, csfh_format_value(b, value));
+        }
+    }
+    if (n >= 0 && (size_t)n < msg_size) {
+        snprintf(msg + n, msg_size - (size_t)n, ")");
+    }
+}
+
 int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
 {
     const csfh_params_t *p = &m->p;
@@ -147,11 +177,44 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
     /* Hertz line contact of the pin in the bore (docs/model.md §14.3) */
     d.E_star = csfh_contact_modulus(p->E1, p->nu1, p->E2, p->nu2);
     d.R_conformal = p->R1 * p->R2 / (p->R2 - p->R1);
-    const double derived[] = {d.delta, d.K_spheres, d.K_cylinders, d.xi, d.esdu_F_max,
-                              d.sbar[0], d.sbar[1], d.E_star, d.R_conformal};
+    d.shock_dir[0] = cos(p->shock_angle);
+    d.shock_dir[1] = sin(p->shock_angle);
+    /* every derived quantity finite, else the message names it, its value and the parameters
+     * it is derived from, with their values (e.g. contact.E1 = contact.E2 = 1e308 overflow the
+     * ESDU force scale) */
+    static const char *const from_delta[] = {"contact.R1", "contact.R2", NULL};
+    static const char *const from_spheres[] = {"contact.E1", "contact.nu1", "contact.E2",
+                                               "contact.nu2", "contact.R1", "contact.R2", NULL};
+    static const char *const from_cylinders[] = {"contact.E1", "contact.nu1", "contact.E2",
+                                                 "contact.nu2", "contact.L", NULL};
+    static const char *const from_spheres_given[] = {"contact.K_spheres_given", NULL};
+    static const char *const from_cylinders_given[] = {"contact.K_cylinders_given", NULL};
+    static const char *const from_xi[] = {"contact.law", "contact.cr", NULL};
+    static const char *const from_esdu[] = {"contact.E1", "contact.nu1", "contact.E2",
+                                            "contact.nu2", "contact.L",  "contact.R1",
+                                            "contact.R2", "contact.esdu_sigma_pi", NULL};
+    static const char *const from_sbar1[] = {"flexure.OF[1]", "flexure.rho", "flexure.phi_root",
+                                             "flexure.beta", NULL};
+    static const char *const from_sbar2[] = {"flexure.OF[2]", "flexure.rho", "flexure.phi_root",
+                                             "flexure.beta", NULL};
+    static const char *const from_E_star[] = {"contact.E1", "contact.nu1", "contact.E2",
+                                              "contact.nu2", NULL};
+    const derived_check_t derived[] = {
+        {"contact.delta", d.delta, from_delta},
+        {"contact.K_spheres", d.K_spheres, p->K_from_materials ? from_spheres : from_spheres_given},
+        {"contact.K_cylinders", d.K_cylinders,
+         p->K_from_materials ? from_cylinders : from_cylinders_given},
+        {"contact.xi", d.xi, from_xi},
+        {"contact.esdu_F_max", d.esdu_F_max, from_esdu},
+        {"flexure.sbar[1]", d.sbar[0], from_sbar1},
+        {"flexure.sbar[2]", d.sbar[1], from_sbar2},
+        /* not FMU variables: named by what they are */
+        {"the contact modulus E* (Hertz line contact)", d.E_star, from_E_star},
+        {"the conformal radius R1 R2 / (R2 - R1)", d.R_conformal, from_delta},
+    };
     for (size_t i = 0; i < sizeof(derived) / sizeof(derived[0]); i++) {
-        if (!isfinite(derived[i])) {
-            snprintf(msg, msg_size, "a derived quantity is not finite (check the parameters)");
+        if (!isfinite(derived[i].value)) {
+            derived_not_finite(m, &derived[i], msg, msg_size);
             return -1;
         }
     }
@@ -159,7 +222,40 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
     return 0;
 }
 
-void csfh_model_smooth_forces(csfh_model_t *m, const double q[3], double Q[3])
+double csfh_half_sine(double A, double T, double t0, double t)
+{
+    /* docs/model.md Eq. (14.9): a half period of a sine of period 2T */
+    if (!(t >= t0 && t <= t0 + T)) {
+        return 0.0;
+    }
+    return A * sin(CSFH_PI * (t - t0) / T);
+}
+
+void csfh_model_frame_acceleration(const csfh_model_t *m, double t, double a[2])
+{
+    a[0] = m->a_base[0];
+    a[1] = m->a_base[1];
+    if (m->p.shock_peak != 0.0) {
+        const double s =
+            csfh_half_sine(m->p.shock_peak, m->p.shock_duration, m->p.shock_start, t);
+        a[0] += s * m->d.shock_dir[0];
+        a[1] += s * m->d.shock_dir[1];
+    }
+}
+
+double csfh_model_next_time_event(const csfh_model_t *m, double t)
+{
+    if (m->p.shock_peak == 0.0) {
+        return INFINITY;
+    }
+    const double t_end = m->p.shock_start + m->p.shock_duration;
+    if (t < m->p.shock_start) {
+        return m->p.shock_start;
+    }
+    return t < t_end ? t_end : INFINITY;
+}
+
+void csfh_model_smooth_forces(csfh_model_t *m, double t, const double q[3], double Q[3])
 {
     /* Q_ext + Q_g, Q_g = [0, -m1 g, 0], and the d'Alembert force -m1 a_base at G1 of the frame's
      * acceleration (docs/model.md Eq. (14.1)); with a_base = 0 the sums are bitwise those
@@ -167,6 +263,14 @@ void csfh_model_smooth_forces(csfh_model_t *m, const double q[3], double Q[3])
     Q[0] = m->u_in[0] - m->p.m1 * m->a_base[0];
     Q[1] = m->u_in[1] - m->p.m1 * m->p.g - m->p.m1 * m->a_base[1];
     Q[2] = m->u_in[2];
+    if (m->p.shock_peak != 0.0) {
+        /* the shock pulse at the integrator's time t (§14.8): one more d'Alembert force; without
+         * a pulse nothing is added, so the sums stay bitwise those of an autonomous model */
+        const double s =
+            csfh_half_sine(m->p.shock_peak, m->p.shock_duration, m->p.shock_start, t);
+        Q[0] -= m->p.m1 * s * m->d.shock_dir[0];
+        Q[1] -= m->p.m1 * s * m->d.shock_dir[1];
+    }
     if (m->p.flexure_enabled) {
         double Qe[3];
         csfh_count(&m->counters.flexure);
@@ -219,11 +323,11 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
     }
 }
 
-int csfh_model_derivatives(csfh_model_t *m, const double x[6], double xdot[6])
+int csfh_model_derivatives(csfh_model_t *m, double t, const double x[6], double xdot[6])
 {
     csfh_count(&m->counters.rhs);
     double Q[3];
-    csfh_model_smooth_forces(m, x, Q);
+    csfh_model_smooth_forces(m, t, x, Q);
     csfh_contact_eval_t c;
     csfh_model_contact(m, x, x + 3, &c);
     if (c.touching) {
@@ -416,5 +520,6 @@ int csfh_model_outputs(csfh_model_t *m)
     /* margins 1 - peak / allowable (§14.4): 1 unloaded, 0 at the allowable, < 0 beyond */
     o->stress_margin = 1.0 - o->stress_max_peak / m->p.stress_allowable;
     o->pressure_margin = 1.0 - o->pressure_max_peak / m->p.pressure_allowable;
+    csfh_model_frame_acceleration(m, m->time, o->a_frame);
     return c.status == CSFH_LAW_ESDU_CLAMPED ? CSFH_WARN_ESDU_CLAMPED : CSFH_OK;
 }

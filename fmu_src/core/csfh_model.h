@@ -44,6 +44,11 @@ typedef struct {
     double rho, beta, OF[2], phi_root, h, b, Eh, nuh, kappa;
     double stress_allowable; /* Pa: allowable normal stress of the flexure */
     int track_stress_peak;   /* co-simulation: track the flexure stress peak inside the step */
+    /* half-sine shock pulse of the frame (docs/model.md §14.8) */
+    double shock_peak;       /* m/s^2; 0: no pulse */
+    double shock_duration;   /* s */
+    double shock_start;      /* s */
+    double shock_angle;      /* rad, direction of the frame's acceleration */
 } csfh_params_t;
 
 /* Quantities derived from the parameters (csfh_model_prepare). */
@@ -56,6 +61,7 @@ typedef struct {
     csfh_normal_law_t normal;
     double E_star;          /* contact modulus of Eq. (17), Pa */
     double R_conformal;     /* effective radius of the pin in the bore, R1 R2 / (R2 - R1), m */
+    double shock_dir[2];    /* cos, sin of shock.angle */
 } csfh_derived_t;
 
 /* Discrete state of the event-driven compliant contact. */
@@ -80,6 +86,7 @@ typedef struct {
     /* stresses (docs/model.md §14.2-14.4): evaluated with the outputs, never in the RHS */
     double stress_max, stress_location, stress_max_peak, stress_margin;
     double pressure_max, half_width, pressure_max_peak, pressure_margin;
+    double a_frame[2]; /* the frame's acceleration at the output time: a_base + shock pulse */
 } csfh_outputs_t;
 
 /* Peak outputs (contact.F_N_peak, contact.F_T_peak = the largest |F_T|,
@@ -153,19 +160,33 @@ int csfh_model_check_start(const csfh_model_t *m, char *msg, size_t msg_size);
 /* Set the discrete contact state from the initial continuous state (end of initialization). */
 void csfh_model_init_discrete(csfh_model_t *m);
 
-/* Smooth generalized forces at q: gravity + inputs + the d'Alembert force -m1 a_base of the
- * base acceleration at G1 (docs/model.md §14.1) + flexure (if enabled). The Moreau stepper and
- * the RK4 baseline take them from here too. */
-void csfh_model_smooth_forces(csfh_model_t *m, const double q[3], double Q[3]);
+/* The half-sine pulse A sin(pi (t - t0) / T) for t0 <= t <= t0 + T, 0 elsewhere (m/s^2;
+ * docs/model.md Eq. (14.9)). Pure. */
+double csfh_half_sine(double A, double T, double t0, double t);
+
+/* The frame's acceleration at time t, global components: the a_base inputs plus the shock
+ * pulse along shock.angle (docs/model.md §14.1, §14.8). */
+void csfh_model_frame_acceleration(const csfh_model_t *m, double t, double a[2]);
+
+/* The next time event after t: the shock pulse's start or end, whichever comes first after t;
+ * INFINITY when there is none (no pulse, or t past its end). */
+double csfh_model_next_time_event(const csfh_model_t *m, double t);
+
+/* Smooth generalized forces at time t and q: gravity + inputs + the d'Alembert force
+ * -m1 a_frame(t) of the frame's acceleration at G1 (the a_base inputs and the shock pulse,
+ * docs/model.md §14.1, §14.8) + flexure (if enabled). The Moreau stepper and the RK4 baseline
+ * take them from here too. Without a pulse t is not used. */
+void csfh_model_smooth_forces(csfh_model_t *m, double t, const double q[3], double Q[3]);
 
 /* Compliant contact force at (q, u) with the current discrete state: zero outside the contact
  * mode (set by csfh_model_event_update), whatever the gap. */
 void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
                         csfh_contact_eval_t *c);
 
-/* xdot = f(x) with the current inputs and discrete state. Returns CSFH_OK,
- * CSFH_WARN_ESDU_CLAMPED, or CSFH_ERR_NONFINITE if any derivative is not finite. */
-int csfh_model_derivatives(csfh_model_t *m, const double x[6], double xdot[6]);
+/* xdot = f(t, x) with the current inputs and discrete state (t enters through the shock pulse
+ * only: the integrator's own time, not m->time). Returns CSFH_OK, CSFH_WARN_ESDU_CLAMPED, or
+ * CSFH_ERR_NONFINITE if any derivative is not finite. */
+int csfh_model_derivatives(csfh_model_t *m, double t, const double x[6], double xdot[6]);
 
 /* Event indicator of the contact: the gap, offset by the hysteresis so that it never sits at 0
  * right after an event (1 when the contact law is none: no events). */

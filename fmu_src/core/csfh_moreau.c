@@ -68,9 +68,10 @@ int csfh_moreau_step(csfh_model_t *m, const csfh_moreau_options_t *o, csfh_morea
     for (int i = 0; i < 3; i++) {
         qM[i] = q[i] + 0.5 * h * u[i];
     }
-    /* 2. smooth forces at the midpoint (gravity, flexure, inputs: the FMU's functions) */
+    /* 2. smooth forces at the midpoint (gravity, flexure, inputs, the shock pulse at the
+     * midpoint's time: the FMU's functions); m->time is the step's start */
     double Q[3], u_free[3];
-    csfh_model_smooth_forces(m, qM, Q);
+    csfh_model_smooth_forces(m, m->time + 0.5 * h, qM, Q);
     for (int i = 0; i < 3; i++) {
         u_free[i] = u[i] + h * Minv[i] * Q[i];
     }
@@ -194,6 +195,7 @@ int csfh_moreau_run(csfh_model_t *m, const csfh_moreau_options_t *o, double t0, 
         const double t = t0 + (double)k * o->h;
         const int was_active = mem.active;
         csfh_moreau_step_t info;
+        m->time = t; /* the step's start (the shock pulse is evaluated at its midpoint) */
         status = csfh_moreau_step(m, o, &mem, q, u, &info);
         stats->steps++;
         if (info.mode != CSFH_MOREAU_FREE) {

@@ -6,22 +6,22 @@
 #include "csfh_contact.h"
 
 /* Classical RK4 step with the model's right-hand side (current discrete state). */
-static int rk4_step(csfh_model_t *m, const double x[6], double h, double xn[6])
+static int rk4_step(csfh_model_t *m, double t, const double x[6], double h, double xn[6])
 {
     double k1[6], k2[6], k3[6], k4[6], y[6];
-    int status = csfh_model_derivatives(m, x, k1);
+    int status = csfh_model_derivatives(m, t, x, k1);
     for (int i = 0; i < 6; i++) {
         y[i] = x[i] + 0.5 * h * k1[i];
     }
-    status |= csfh_model_derivatives(m, y, k2);
+    status |= csfh_model_derivatives(m, t + 0.5 * h, y, k2);
     for (int i = 0; i < 6; i++) {
         y[i] = x[i] + 0.5 * h * k2[i];
     }
-    status |= csfh_model_derivatives(m, y, k3);
+    status |= csfh_model_derivatives(m, t + 0.5 * h, y, k3);
     for (int i = 0; i < 6; i++) {
         y[i] = x[i] + h * k3[i];
     }
-    status |= csfh_model_derivatives(m, y, k4);
+    status |= csfh_model_derivatives(m, t + h, y, k4);
     for (int i = 0; i < 6; i++) {
         xn[i] = x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         if (!isfinite(xn[i])) {
@@ -79,7 +79,7 @@ int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
     int status = CSFH_OK;
     while (t < t_end - 1e-12 * fabs(t_end)) {
         const double h_try = fmin(h, t_end - t);
-        status = rk4_step(m, x, h_try, xn);
+        status = rk4_step(m, t, x, h_try, xn);
         if (status != CSFH_OK) {
             break;
         }

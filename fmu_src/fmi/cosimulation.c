@@ -87,7 +87,10 @@
 #define FMU_EVENT_KINDS 8             /* RK45's first-step memory: event_update codes 1..7 */
 
 /* Results of solver_step. */
-enum { STEP_OK = 0, STEP_ROOT = 1, STEP_FAILED = -1 };
+/* what one pass of cs_do_step's loop reached: the end of a step, a root, a time event (the
+ * integrator's stop time), auto's switch of method at the end of a step (kept pending when that
+ * lies beyond the communication point, like a root there), or a failure */
+enum { STEP_OK = 0, STEP_ROOT = 1, STEP_TSTOP = 2, STEP_SWITCH = 3, STEP_FAILED = -1 };
 
 #define PEAK_LOG_MAX 64   /* RK45 steps kept for the peaks before they are analysed anyway */
 #define PEAK_SNAPSHOTS 8  /* discrete states kept for them (events in one communication step) */
@@ -126,9 +129,11 @@ struct csfh_cvode {
     int hint_code;
     N_Vector y;             /* the integrator's solution at the time it returned */
     double tolerance;       /* the relative tolerance the solver was set up with */
-    N_Vector y_root;  /* a root reported beyond the end of the last communication step: */
-    double t_root;    /* the state there and its time, */
-    int root_pending; /* handled in the communication step that contains it */
+    N_Vector y_root;  /* a root (or time event) reported beyond the end of the last */
+    double t_root;    /* communication step: the state there and its time, */
+    int root_pending; /* STEP_ROOT, STEP_TSTOP or STEP_SWITCH, handled in the communication
+                         step that contains it (0: none) */
+    int switch_method; /* STEP_SWITCH pending: the method auto chose at t_root */
     long counted_steps; /* steps since the last (re)start already added to the model's counter */
     /* auto (auto_decide) */
     long window_steps;      /* the integrator's step, failure and stiff-step counts since its */
@@ -181,9 +186,9 @@ static const char *method_name(int method)
 static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
 {
     fmu_instance_t *inst = (fmu_instance_t *)user_data;
-    (void)t;
-    const int status =
-        fmu_model.derivatives(inst->model, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+    /* the model's time at CVODE's local time t (a time-dependent model: the shock pulse) */
+    const int status = fmu_model.derivatives(inst->model, inst->cvode->origin + t,
+                                             N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
     return status == FMU_MODEL_NONFINITE ? 1 : 0; /* recoverable: CVODE retries a smaller step */
 }
 
@@ -210,8 +215,8 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *gout, void *user_data)
 static int rk_rhs(double t, const double *y, double *ydot, void *user_data)
 {
     fmu_instance_t *inst = (fmu_instance_t *)user_data;
-    (void)t;
-    const int status = fmu_model.derivatives(inst->model, y, ydot);
+    /* the model's time at the local time t, as for CVODE (rhs) */
+    const int status = fmu_model.derivatives(inst->model, inst->cvode->origin + t, y, ydot);
     return status == FMU_MODEL_NONFINITE ? 1 : 0; /* recoverable: a smaller step */
 }
 
@@ -437,7 +442,7 @@ static int solver_step(fmu_instance_t *inst, double *tret)
             rk_check(inst, flag, "rk45_step");
             return STEP_FAILED;
         }
-        return flag == RK45_ROOT ? STEP_ROOT : STEP_OK;
+        return flag == RK45_ROOT ? STEP_ROOT : flag == RK45_TSTOP ? STEP_TSTOP : STEP_OK;
     }
     /* tout only sets the size of the first step after a (re)start (CVODE's estimate is bounded
      * by a tenth of the distance to tout): a fixed horizon, so that the step sequence does not
@@ -448,7 +453,17 @@ static int solver_step(fmu_instance_t *inst, double *tret)
         cv_check(inst, flag, "CVode");
         return STEP_FAILED;
     }
-    return flag == CV_ROOT_RETURN ? STEP_ROOT : STEP_OK;
+    return flag == CV_ROOT_RETURN ? STEP_ROOT : flag == CV_TSTOP_RETURN ? STEP_TSTOP : STEP_OK;
+}
+
+/* The next stop time (local; > the integrator's current time): no step goes beyond it. */
+static fmi2Status solver_set_stop_time(fmu_instance_t *inst, double tau_stop)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    if (cv->method == FMU_CS_RK45) {
+        return rk_check(inst, rk45_set_stop_time(cv->rk, tau_stop), "rk45_set_stop_time");
+    }
+    return cv_check(inst, CVodeSetStopTime(cv->mem, tau_stop), "CVodeSetStopTime");
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -1124,6 +1139,42 @@ static fmi2Status finish_step(fmu_instance_t *inst, double t_end, fmi2Status sta
     return status;
 }
 
+/* ------------------------------------------------------------------------------------------ */
+/* time events (fmu_model.next_time_event; csfh: the start and end of the shock pulse, where the
+ * right-hand side has a kink): the integrator is given the next one as its stop time, so that no
+ * step straddles it; it returns STEP_TSTOP there, and cs_do_step restarts it as at a state
+ * event. Without time events nothing here is called. */
+
+static fmi2Status set_time_event_stop(fmu_instance_t *inst)
+{
+    csfh_cvode_t *cv = inst->cvode;
+    const double tn = solver_time(cv);
+    double after = cv->origin + tn;
+    for (int i = 0; i < 8; i++) { /* events that round to CVODE's current time are behind it */
+        const double te = fmu_model.next_time_event(inst->model, after);
+        if (!isfinite(te)) {
+            return fmi2OK;
+        }
+        if (te - cv->origin > tn) {
+            return solver_set_stop_time(inst, te - cv->origin);
+        }
+        after = te;
+    }
+    return fmi2OK;
+}
+
+/* auto's decision at the local time t (logged when it changes something): the method for what
+ * follows. */
+static int auto_next_method(fmu_instance_t *inst, double t)
+{
+    char why[256];
+    const int method = auto_choose(inst->cvode, t, why, sizeof(why));
+    if (why[0] != '\0') {
+        fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", why);
+    }
+    return method;
+}
+
 fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
 {
     const double now_abs = *fmu_time(inst);
@@ -1163,8 +1214,8 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
         if (cv->root_pending && cv->t_root <= t_end) {
             memcpy(N_VGetArrayPointer(cv->y), N_VGetArrayPointer(cv->y_root), NX * sizeof(double));
             tret = cv->t_root;
+            flag = cv->root_pending; /* STEP_ROOT, STEP_TSTOP or STEP_SWITCH */
             cv->root_pending = 0;
-            flag = STEP_ROOT;
         } else if (cv->root_pending || solver_time(cv) >= t_end) {
             /* the last step (and the root check) already reaches past t_end */
             flag = solver_dense(cv, t_end, 0, cv->y) < 0 ? STEP_FAILED : STEP_OK;
@@ -1175,12 +1226,26 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             }
             tret = t_end;
         } else {
+            if (fmu_model.next_time_event != NULL && set_time_event_stop(inst) != fmi2OK) {
+                inst->cvode_needs_reinit = 1;
+                return fmi2Error;
+            }
             flag = solver_step(inst, &tret);
+            if (flag == STEP_OK && automatic && tret >= t_end) {
+                /* auto decides at the end of every step, also of one that reaches the
+                 * communication point, and switches there (at once, or in the communication
+                 * step that contains it): its decisions do not depend on the grid */
+                const int method = auto_next_method(inst, tret);
+                if (method != cv->method) {
+                    flag = STEP_SWITCH;
+                    cv->switch_method = method;
+                }
+            }
             if (flag != STEP_FAILED && tret > t_end) {
-                if (flag == STEP_ROOT) {
+                if (flag != STEP_OK) { /* a root, time event or switch beyond t_end */
                     memcpy(N_VGetArrayPointer(cv->y_root), N_VGetArrayPointer(cv->y), NX * sizeof(double));
                     cv->t_root = tret;
-                    cv->root_pending = 1;
+                    cv->root_pending = flag;
                 }
                 flag = solver_dense(cv, t_end, 0, cv->y) < 0 ? STEP_FAILED : STEP_OK;
                 tret = t_end;
@@ -1215,7 +1280,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
         }
         track_peaks(inst, tret_before, tret, stepped);
         take_solution(inst, tret);
-        if (flag != STEP_ROOT && tret >= t_end) {
+        if (flag == STEP_OK && tret >= t_end) {
             break;
         }
         if (steps > MAX_STEPS_PER_CALL) {
@@ -1244,6 +1309,9 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
                 peaks_forget(cv); /* what follows the event has a new interpolant */
                 peak_log_event(cv, tret);
             }
+        } else if (flag == STEP_TSTOP) {
+            restart = 1; /* a time event: the right-hand side's kink (see set_time_event_stop) */
+            peaks_forget(cv);
         }
         fmi2Status s = fmi2OK;
         if (restart) {
@@ -1257,11 +1325,9 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
                              code > 0 ? cv->event_h[code] : 0.0);
             start_segment(cv, tret);
         } else if (automatic) {
-            char why[256];
-            const int method = auto_choose(cv, tret, why, sizeof(why));
-            if (why[0] != '\0') {
-                fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", why);
-            }
+            /* auto's decision at the end of the step (made already for a step that reached
+             * the communication point: STEP_SWITCH) */
+            const int method = flag == STEP_SWITCH ? cv->switch_method : auto_next_method(inst, tret);
             if (method == cv->method) {
                 continue;
             }

@@ -33,13 +33,18 @@ static void init_discrete(void *mv, char *msg, size_t msg_size)
     }
 }
 
-static int derivatives(void *m, const double *x, double *xdot)
+static int derivatives(void *m, double t, const double *x, double *xdot)
 {
-    const int status = csfh_model_derivatives((csfh_model_t *)m, x, xdot);
+    const int status = csfh_model_derivatives((csfh_model_t *)m, t, x, xdot);
     if (status == CSFH_ERR_NONFINITE) {
         return FMU_MODEL_NONFINITE;
     }
     return status == CSFH_WARN_ESDU_CLAMPED ? FMU_MODEL_WARNING : FMU_MODEL_OK;
+}
+
+static double next_time_event(const void *m, double t)
+{
+    return csfh_model_next_time_event((const csfh_model_t *)m, t);
 }
 
 static void event_indicators(const void *m, const double *x, double *z)
@@ -74,7 +79,8 @@ static int outputs(void *mv, char *msg, size_t msg_size)
                              o->indentation_rate, o->E_total, o->F_N_peak, o->F_T_peak,
                              o->indentation_peak, o->stress_max, o->stress_location,
                              o->stress_max_peak, o->stress_margin, o->pressure_max,
-                             o->half_width, o->pressure_max_peak, o->pressure_margin};
+                             o->half_width, o->pressure_max_peak, o->pressure_margin,
+                             o->a_frame[0], o->a_frame[1]};
     for (size_t i = 0; i < sizeof(values) / sizeof(values[0]); i++) {
         if (!isfinite(values[i])) {
             snprintf(msg, msg_size, "non-finite output at t = %.17g", m->time);
@@ -208,6 +214,7 @@ const fmu_model_t fmu_model = {
     .check_start = check_start,
     .init_discrete = init_discrete,
     .derivatives = derivatives,
+    .next_time_event = next_time_event,
     .event_indicators = event_indicators,
     .event_update = event_update,
     .outputs = outputs,

@@ -169,7 +169,8 @@ static fmi2Status update_derivatives(fmu_instance_t *inst, const char *function)
         return fmi2Error;
     }
     double *x = fmu_states(inst);
-    const int status = fmu_model.derivatives(inst->model, x, fmu_derivatives(inst));
+    const int status =
+        fmu_model.derivatives(inst->model, *fmu_time(inst), x, fmu_derivatives(inst));
     if (status == FMU_MODEL_NONFINITE) {
         char text[MSG_SIZE];
         LOG_ERROR(inst, "%s: non-finite derivative at t = %.17g, state [%s]", function,
@@ -324,12 +325,26 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     inst->instance_name = (char *)malloc(strlen(instanceName) + 1);
     inst->model = calloc(1, fmu_model.size);
     inst->last_step_x = (double *)calloc((size_t)fmu_model.n_states + 1, sizeof(double));
-    if (inst->instance_name == NULL || inst->model == NULL || inst->last_step_x == NULL) {
+    unsigned int max_vr = 0;
+    for (int i = 0; i < fmu_model.n_variables; i++) {
+        max_vr = fmu_model.variables[i].vr > max_vr ? fmu_model.variables[i].vr : max_vr;
+    }
+    inst->n_vr_index = max_vr + 1;
+    inst->vr_index = (int *)malloc((size_t)inst->n_vr_index * sizeof(int));
+    if (inst->instance_name == NULL || inst->model == NULL || inst->last_step_x == NULL ||
+        inst->vr_index == NULL) {
         free(inst->instance_name);
         free(inst->model);
         free(inst->last_step_x);
+        free(inst->vr_index);
         free(inst);
         return NULL;
+    }
+    for (unsigned int r = 0; r < inst->n_vr_index; r++) {
+        inst->vr_index[r] = -1;
+    }
+    for (int i = fmu_model.n_variables - 1; i >= 0; i--) { /* the first of equal references */
+        inst->vr_index[fmu_model.variables[i].vr] = i;
     }
     strcpy(inst->instance_name, instanceName);
     inst->type = fmuType;
@@ -354,6 +369,7 @@ void fmi2FreeInstance(fmi2Component c)
     cs_free(inst);
     states_free_all(inst); /* FMU states the importer did not free */
     free(inst->last_step_x);
+    free(inst->vr_index);
     free(inst->model);
     free(inst->instance_name);
     free(inst);
@@ -487,11 +503,8 @@ static const csfh_variable_t *lookup(fmu_instance_t *inst, const char *function,
                                      csfh_type_t type)
 {
     const csfh_variable_t *v = NULL;
-    for (int i = 0; i < fmu_model.n_variables; i++) {
-        if (fmu_model.variables[i].vr == vr) {
-            v = &fmu_model.variables[i];
-            break;
-        }
+    if (vr < inst->n_vr_index && inst->vr_index[vr] >= 0) {
+        v = &fmu_model.variables[inst->vr_index[vr]];
     }
     const int type_ok = v != NULL && (v->type == type ||
                                       (type == CSFH_TYPE_INTEGER && v->type == CSFH_TYPE_ENUMERATION));
@@ -1128,8 +1141,12 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
      * cannot start another event: the event iteration ends (README, "Using the FMU in other
      * tools"). */
     eventInfo->valuesOfContinuousStatesChanged = mode_changed ? fmi2True : fmi2False;
-    eventInfo->nextEventTimeDefined = fmi2False;
-    eventInfo->nextEventTime = 0.0;
+    /* time events (csfh: the ends of the shock pulse): the next one after the current time */
+    const double next = fmu_model.next_time_event != NULL
+                            ? fmu_model.next_time_event(inst->model, *fmu_time(inst))
+                            : INFINITY;
+    eventInfo->nextEventTimeDefined = isfinite(next) ? fmi2True : fmi2False;
+    eventInfo->nextEventTime = isfinite(next) ? next : 0.0;
     return fmi2OK;
 }
 

@@ -65,6 +65,10 @@ typedef struct {
     int last_step_valid;
     double last_step_time;
     double *last_step_x;
+    /* value reference -> index in fmu_model.variables (-1: none), n_vr_index entries: get and
+     * set find a variable in constant time (a linear search cost 0.5 us per value) */
+    int *vr_index;
+    unsigned int n_vr_index;
 } fmu_instance_t;
 
 void fmu_log(fmu_instance_t *inst, fmi2Status status, unsigned int category, const char *fmt, ...)

@@ -54,9 +54,14 @@ typedef struct {
     /* End of initialization: set the discrete state from the initial continuous state. Writes a
      * logEvents message (or an empty string). */
     void (*init_discrete)(void *m, char *msg, size_t msg_size);
-    /* xdot = f(x) with the current inputs and discrete state; FMU_MODEL_OK, FMU_MODEL_WARNING or
-     * FMU_MODEL_NONFINITE. NULL when n_states == 0. */
-    int (*derivatives)(void *m, const double *x, double *xdot);
+    /* xdot = f(t, x) with the current inputs and discrete state, at the integrator's time t (model
+     * exchange: the model's time; co-simulation: CVODE's time, not the model's); FMU_MODEL_OK,
+     * FMU_MODEL_WARNING or FMU_MODEL_NONFINITE. NULL when n_states == 0. */
+    int (*derivatives)(void *m, double t, const double *x, double *xdot);
+    /* Time events (may be NULL: none): the first time > t at which the right-hand side changes
+     * its form (csfh: the start and the end of the shock pulse), or INFINITY. Co-simulation stops
+     * CVODE exactly there and restarts it; model exchange reports it as nextEventTime. */
+    double (*next_time_event)(const void *m, double t);
     /* z[n_event_indicators] at state x. NULL when n_event_indicators == 0. */
     void (*event_indicators)(const void *m, const double *x, double *z);
     /* Discrete-state update at an event (from the model's time and state): 0 if nothing changed,

@@ -95,6 +95,8 @@ struct rk45 {
     double *g_n, *g_lo, *g_hi, *g_mid;
     double t_lo;
     int resume_roots; /* a root was returned: the rest of the step [t_lo, t_n] is searched next */
+    double t_stop;    /* stop time (has_stop), and the last step ended there (at_stop) */
+    int has_stop, at_stop;
     rk45_stats_t stats;
     char message[256];
     double *block; /* every vector above */
@@ -207,6 +209,7 @@ int rk45_init(rk45_t *r, double t0, const double *y0, double h_max_first, double
     r->dense_valid = 0;
     r->have_step = 0;
     r->resume_roots = 0;
+    r->has_stop = r->at_stop = 0;
     r->initialized = 0;
     r->stats.rhs++;
     const int status = r->f(t0, r->y, r->k[0], r->user);
@@ -507,6 +510,20 @@ static int check_roots(rk45_t *r, double t_lo, double *t, double *y)
     r->resume_roots = 0;
     *t = r->t_n;
     memcpy(y, r->y, (size_t)r->n * sizeof(double));
+    if (r->at_stop) {
+        r->at_stop = 0;
+        return RK45_TSTOP;
+    }
+    return RK45_SUCCESS;
+}
+
+int rk45_set_stop_time(rk45_t *r, double t_stop)
+{
+    if (!(t_stop > r->t_n) || !isfinite(t_stop)) {
+        return RK45_ILL_INPUT;
+    }
+    r->t_stop = t_stop;
+    r->has_stop = 1;
     return RK45_SUCCESS;
 }
 
@@ -541,6 +558,11 @@ int rk45_step(rk45_t *r, double *t, double *y)
     int err_fails = 0, rhs_fails = 0;
     double h = r->h, err = 0.0, h_failed = 0.0, err_failed = 0.0;
     for (;;) {
+        /* the stop time: the step that would pass it ends on it */
+        const int hits_stop = r->has_stop && t0 + h >= r->t_stop;
+        if (hits_stop) {
+            h = r->t_stop - t0;
+        }
         if (!(t0 + h > t0) || !isfinite(h)) {
             set_message(r, "the step size %.3g underflows the time t = %.17g", h, t0);
             return RK45_TOO_SMALL;
@@ -657,6 +679,11 @@ int rk45_step(rk45_t *r, double *t, double *y)
     r->t_old = t0;
     r->t_n = t0 + h;
     r->h_last = h;
+    if (r->has_stop && r->t_n >= r->t_stop) { /* the stop time reached: exactly */
+        r->t_n = r->t_stop;
+        r->has_stop = 0;
+        r->at_stop = 1;
+    }
     r->h = h * fac;
     r->fsal_swap = 1;
     r->dense_valid = 0;

@@ -26,6 +26,7 @@ typedef int (*rk45_root_fn)(double t, const double *y, double *g, void *user);
 enum {
     RK45_SUCCESS = 0,
     RK45_ROOT = 1,              /* rk45_step: a root of g inside the step (t, y: at the root) */
+    RK45_TSTOP = 2,             /* rk45_step: the step ended at the stop time (rk45_set_stop_time) */
     RK45_MEM_FAIL = -1,
     RK45_ILL_INPUT = -2,
     RK45_ERR_FAILURE = -3,      /* the error test failed repeatedly */
@@ -58,6 +59,11 @@ int rk45_set_tolerances(rk45_t *r, double rtol, const double *atol);
  * estimated (one more evaluation of f); at most h_max_first either way. Statistics are kept
  * across restarts. */
 int rk45_init(rk45_t *r, double t0, const double *y0, double h_max_first, double h_first);
+
+/* A stop time > the current time: no step goes beyond it, the one that reaches it ends exactly
+ * there and rk45_step returns RK45_TSTOP (after any root before it); then it is cleared. A
+ * (re)start clears it too. RK45_ILL_INPUT if not after the current time. */
+int rk45_set_stop_time(rk45_t *r, double t_stop);
 
 /* One step: the next root inside the step already taken, or a new step (with its roots). On
  * RK45_SUCCESS (t, y) is the end of the step, on RK45_ROOT the root (the first point found past

@@ -16,11 +16,12 @@ The package, by role (each layer imports only the ones below it; tests/python/te
 checks it):
 
 * ``csfh.cli``: the command line;
-* ``csfh.studies``: the paper's comparison, accuracy, stress, sweep and tolerance studies, each
-  with its report;
+* ``csfh.studies``: the paper's comparison, accuracy, stress, sweep, tolerance and shock studies,
+  each with its report;
 * ``csfh.cosim``: co-simulation of the hinge with the comb-drive actuator;
 * ``csfh.batch``: many runs of one scene (tasks, result store, executors);
-* ``csfh.runners``: one run of one model (the FMU, Moreau, RK4) -> a `Trajectory`;
+* ``csfh.runners``: one run of one model (the FMU, Moreau, RK4) -> a `Trajectory`, and batches
+  of runs (Moreau in the C core, co-simulation in the FMU's own binary);
 * ``csfh.model``: what the model is (the FMUs' interfaces, presets, scenes, the C core);
 * foundation: ``paths`` (where the binaries are), ``errors``, ``trajectory``, ``output`` (every
   file written), ``progress``, ``plotting``.
@@ -41,7 +42,8 @@ if TYPE_CHECKING:
     from .cosim.run import cosimulate
     from .errors import SceneError, SimulationError
     from .model.scene import IntegratorSettings, Scene, load_scene, scene_from_dict
-    from .paths import combdrive_fmu_path, core_library_path, fmu_path
+    from .paths import batch_library_path, combdrive_fmu_path, core_library_path, fmu_path
+    from .runners.cs_batch import CsBatchResult, cs_batch
     from .runners.moreau import moreau
     from .runners.simulate import simulate
     from .studies.compare import Comparison, compare
@@ -50,15 +52,18 @@ if TYPE_CHECKING:
 _PUBLIC = {
     "Comparison": "csfh.studies.compare",
     "CosimError": "csfh.cosim.coupling",
+    "CsBatchResult": "csfh.runners.cs_batch",
     "IntegratorSettings": "csfh.model.scene",
     "Scene": "csfh.model.scene",
     "SceneError": "csfh.errors",
     "SimulationError": "csfh.errors",
     "Trajectory": "csfh.trajectory",
+    "batch_library_path": "csfh.paths",
     "combdrive_fmu_path": "csfh.paths",
     "compare": "csfh.studies.compare",
     "core_library_path": "csfh.paths",
     "cosimulate": "csfh.cosim.run",
+    "cs_batch": "csfh.runners.cs_batch",
     "fmu_path": "csfh.paths",
     "load_scene": "csfh.model.scene",
     "moreau": "csfh.runners.moreau",
@@ -70,16 +75,19 @@ _PUBLIC = {
 __all__ = [
     "Comparison",
     "CosimError",
+    "CsBatchResult",
     "IntegratorSettings",
     "Scene",
     "SceneError",
     "SimulationError",
     "Trajectory",
     "__version__",
+    "batch_library_path",
     "combdrive_fmu_path",
     "compare",
     "core_library_path",
     "cosimulate",
+    "cs_batch",
     "fmu_path",
     "load_scene",
     "moreau",

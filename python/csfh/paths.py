@@ -48,3 +48,13 @@ def combdrive_fmu_path() -> Path:
         candidates.append(Path(os.environ["CSFH_FMU"]).parent / "combdrive.fmu")
     candidates += [_PACKAGE_DIR / "combdrive.fmu", _SOURCE_ROOT / "build" / "combdrive.fmu"]
     return _first_existing(candidates, "combdrive.fmu")
+
+
+def batch_library_path() -> Path:
+    """Path of libcsfh_batch.so (the batch co-simulation master, csfh.runners.cs_batch):
+    $CSFH_BATCH, the package copy, or build/libcsfh_batch.so."""
+    candidates = []
+    if os.environ.get("CSFH_BATCH"):
+        candidates.append(Path(os.environ["CSFH_BATCH"]))
+    candidates += [_PACKAGE_DIR / "libcsfh_batch.so", _SOURCE_ROOT / "build" / "libcsfh_batch.so"]
+    return _first_existing(candidates, "libcsfh_batch.so")

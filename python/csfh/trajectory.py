@@ -38,6 +38,15 @@ UNITS = {
     "v_T": "m/s",
     "gap": "m",
     "energy": "J",
+    "F_N_peak": "N",
+    "F_T_peak": "N",
+    "indentation_peak": "m",
+    "stress": "Pa",
+    "stress_peak": "Pa",
+    "pressure": "Pa",
+    "pressure_peak": "Pa",
+    "a_frame_x": "m/s2",
+    "a_frame_y": "m/s2",
     "Lambda_N": "N s",
     "Lambda_T": "N s",
     "mode": "-",
@@ -72,18 +81,34 @@ class Trajectory:
 
     def summary(self) -> dict[str, Any]:
         """First contact time, number of contacts, largest F_N, indentation and abs(F_T) (over
-        the output table and the per-step records), and the integrator, its steps,
-        right-hand-side evaluations and wall time."""
+        the output table, its peak columns where the run has them (co-simulation: the peaks over
+        each communication step) and the per-step records), the largest flexure stress and
+        contact pressure where the table has them, and the integrator, its steps,
+        right-hand-side evaluations and wall time. The number of contacts is the FMU's count
+        where the run reports it (co-simulation: a step can hold several onsets)."""
         F_N = self.table["F_N"]
         F_T = self.table["F_T"]
         ind = self.table["indentation"]
         out: dict[str, Any] = {
             "first_contact_time": float(self.contacts[0]) if len(self.contacts) else None,
-            "contacts": len(self.contacts),
+            "contacts": int(self.stats.get("contact_count", len(self.contacts))),
             "max_F_N": float(np.max(F_N)) if len(F_N) else 0.0,
             "max_indentation": float(np.max(ind)) if len(ind) else 0.0,
             "max_abs_F_T": float(np.max(np.abs(F_T))) if len(F_T) else 0.0,
         }
+        for key, column in (
+            ("max_F_N", "F_N_peak"),
+            ("max_indentation", "indentation_peak"),
+            ("max_abs_F_T", "F_T_peak"),
+        ):
+            if column in self.table and len(self.table[column]):
+                out[key] = max(out[key], float(np.max(self.table[column])))
+        for key, column in (
+            ("max_flexure_stress", "stress_peak"),
+            ("max_contact_pressure", "pressure_peak"),
+        ):
+            if column in self.table and len(self.table[column]):
+                out[key] = float(np.max(self.table[column]))
         if self.steps:
             out["max_F_N"] = max(out["max_F_N"], float(np.max(self.steps["F_N"], initial=0.0)))
             out["max_indentation"] = max(

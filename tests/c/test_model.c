@@ -221,6 +221,29 @@ static void test_prepare_rejects(void)
         csfh_model_prepare(&m, msg, sizeof(msg));
         CHECK_STR_CONTAINS(msg, "contact.R2", "R1 >= R2 message names contact.R2 too");
     }
+    /* a derived quantity that overflows is named, with the parameters it comes from and their
+     * values: E1 = E2 = 1e308 are each in range, but the ESDU force scale 4 L dR / sum overflows
+     * (sum = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 ~ 1.8e-308) */
+    {
+        csfh_model_t m;
+        char msg[MSG_SIZE] = "";
+        setup_default(&m);
+        const csfh_derived_t before = m.d;
+        m.p.E1 = 1e308;
+        m.p.E2 = 1e308;
+        CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), -1, "E1 = E2 = 1e308 refused");
+        CHECK_STR_CONTAINS(msg, "contact.esdu_F_max = inf is not finite", "names the quantity");
+        CHECK_STR_CONTAINS(msg, "contact.E1 = 1e+308", "names E1 and its value");
+        CHECK_STR_CONTAINS(msg, "contact.E2 = 1e+308", "names E2 and its value");
+        CHECK_STR_CONTAINS(msg, "contact.R2 = 0.2", "names R2 and its value");
+        CHECK_TRUE(memcmp(&before, &m.d, sizeof(before)) == 0, "derived unchanged (overflow)");
+        /* the message is cut, never overrun, in a short buffer */
+        char small[40];
+        memset(small, 'x', sizeof(small));
+        csfh_model_prepare(&m, small, 24);
+        CHECK_INT((int)strlen(small), 23, "message cut at the buffer size");
+        CHECK_TRUE(small[25] == 'x', "nothing written past the buffer");
+    }
     /* valid boundary values are accepted */
     const struct {
         const char *name;
@@ -280,7 +303,7 @@ static void test_counters(void)
         m.z.in_contact = 1; /* the contact mode the event update sets (the force acts in it only) */
         m.z.onset_speed = 0.5;
         for (int k = 0; k < 5; k++) {
-            CHECK_INT(csfh_model_derivatives(&m, x, xdot), CSFH_OK, TFMT("derivatives OK (%s)", what));
+            CHECK_INT(csfh_model_derivatives(&m, m.time, x, xdot), CSFH_OK, TFMT("derivatives OK (%s)", what));
         }
         csfh_model_outputs(&m);
         CHECK_INT(m.counters.rhs, 5, TFMT("rhs counter = 5 (%s)", what));
@@ -301,7 +324,7 @@ static void test_counters(void)
     csfh_model_t m;
     setup_default(&m);
     m.counters.rhs = 2147483647;
-    csfh_model_derivatives(&m, x, xdot);
+    csfh_model_derivatives(&m, m.time, x, xdot);
     CHECK_INT(m.counters.rhs, 2147483647, "rhs counter saturates at INT_MAX");
 }
 
@@ -317,14 +340,14 @@ static void test_derivatives(void)
     m.p.flexure_enabled = 0;
     csfh_model_prepare(&m, msg, sizeof(msg));
     csfh_model_init_discrete(&m);
-    CHECK_INT(csfh_model_derivatives(&m, m.x, xdot), CSFH_OK, "free fall: OK");
+    CHECK_INT(csfh_model_derivatives(&m, m.time, m.x, xdot), CSFH_OK, "free fall: OK");
     const double ff[6] = {0.0, 0.0, 0.0, 0.0, -9.81, 0.0};
     for (int i = 0; i < 6; i++) {
         CHECK_ABS(xdot[i], ff[i], 0.0, TFMT("free fall from the start state: xdot[%d]", i));
     }
     /* moving, rotated, out of contact, with inputs */
     const double x1[6] = {0.005, 0.01, 0.1, 0.3, -0.2, 0.5};
-    CHECK_INT(csfh_model_derivatives(&m, x1, xdot), CSFH_OK, "free flight: OK");
+    CHECK_INT(csfh_model_derivatives(&m, m.time, x1, xdot), CSFH_OK, "free flight: OK");
     const double exp1[6] = {0.3, -0.2, 0.5, 0.0, -9.81, 0.0};
     for (int i = 0; i < 6; i++) {
         CHECK_ABS(xdot[i], exp1[i], 0.0, TFMT("free flight: xdot[%d] = [v, 0, -g, 0]", i));
@@ -332,7 +355,7 @@ static void test_derivatives(void)
     m.u_in[0] = 1.0;
     m.u_in[1] = 2.0;
     m.u_in[2] = 0.3;
-    csfh_model_derivatives(&m, x1, xdot);
+    csfh_model_derivatives(&m, m.time, x1, xdot);
     CHECK_CLOSE(xdot[3], 0.1, 1e-15, "input F_ext[1]/m");
     CHECK_CLOSE(xdot[4], -9.81 + 0.2, 1e-15, "input (F_ext[2] - m g)/m");
     CHECK_CLOSE(xdot[5], 0.3 / 0.1617, 1e-15, "input M_ext/I");
@@ -340,12 +363,12 @@ static void test_derivatives(void)
     /* non-finite derivatives -> CSFH_ERR_NONFINITE (the contract is on the derivatives: a NaN
      * velocity is one; a NaN position with flexure off and no contact yields finite ones) */
     const double xbad[6] = {0.0, 0.0, 0.0, NAN, 0.0, 0.0};
-    CHECK_INT(csfh_model_derivatives(&m, xbad, xdot), CSFH_ERR_NONFINITE, "NaN velocity -> error");
+    CHECK_INT(csfh_model_derivatives(&m, m.time, xbad, xdot), CSFH_ERR_NONFINITE, "NaN velocity -> error");
     const double xinf[6] = {0.0, 0.0, 0.0, 0.0, 0.0, INFINITY};
-    CHECK_INT(csfh_model_derivatives(&m, xinf, xdot), CSFH_ERR_NONFINITE, "Inf angular velocity -> error");
+    CHECK_INT(csfh_model_derivatives(&m, m.time, xinf, xdot), CSFH_ERR_NONFINITE, "Inf angular velocity -> error");
     m.p.flexure_enabled = 1;
     const double xbad2[6] = {NAN, 0.0, 0.0, 0.0, 0.0, 0.0};
-    CHECK_INT(csfh_model_derivatives(&m, xbad2, xdot), CSFH_ERR_NONFINITE, "NaN position with flexure -> error");
+    CHECK_INT(csfh_model_derivatives(&m, m.time, xbad2, xdot), CSFH_ERR_NONFINITE, "NaN position with flexure -> error");
     m.p.flexure_enabled = 0;
 
     /* flexure at q0 = [0.01, 0.01, 0] (out of contact): Q_e/M with PHYSICS 2.4's numbers */
@@ -353,7 +376,7 @@ static void test_derivatives(void)
     csfh_model_prepare(&m, msg, sizeof(msg));
     csfh_model_init_discrete(&m);
     CHECK_INT(m.z.in_contact, 0, "q0 starts out of contact");
-    csfh_model_derivatives(&m, m.x, xdot);
+    csfh_model_derivatives(&m, m.time, m.x, xdot);
     CHECK_ABS(xdot[3] * 10.0, -38.914, 0.505e-3, "flexure: m xdot_vx = Q_e,x = -38.914");
     CHECK_ABS(xdot[4] * 10.0 + 98.1, -46.482, 0.505e-3, "flexure: m (xdot_vy + g) = Q_e,y = -46.482");
     /* moment: PHYSICS used the rounded Table-1 sbar (see test_flexure): bound 1.5e-4 N m */
@@ -370,12 +393,12 @@ static void test_derivatives(void)
     double x2[6] = {0.0, -(delta + rho), 0.0, 0.0, -v, 0.0};
     /* not yet in contact mode (a state the integrator probes before it located the onset): the
      * relation gap < 0 is frozen between events, so only gravity acts */
-    CHECK_INT(csfh_model_derivatives(&m, x2, xdot), CSFH_OK, "contact: OK");
+    CHECK_INT(csfh_model_derivatives(&m, m.time, x2, xdot), CSFH_OK, "contact: OK");
     CHECK_CLOSE(xdot[4], -9.81, 1e-12, "probe before the event: no contact force (frozen mode)");
     /* contact_by_gap (the paper's fixed-step RK4): the force acts wherever the gap is negative,
      * with the state's own rate as the onset rate */
     m.contact_by_gap = 1;
-    CHECK_INT(csfh_model_derivatives(&m, x2, xdot), CSFH_OK, "contact by gap: OK");
+    CHECK_INT(csfh_model_derivatives(&m, m.time, x2, xdot), CSFH_OK, "contact by gap: OK");
     m.contact_by_gap = 0;
     const double FN1 = K * pow(rho, 1.5) * (1.0 + 0.1425);
     CHECK_CLOSE(xdot[4], (FN1 - 98.1) / 10.0, 1e-9, "contact by gap: F_N = K rho^1.5 (1 + xi)");
@@ -384,13 +407,13 @@ static void test_derivatives(void)
     /* in contact mode with the onset speed captured at the event */
     m.z.in_contact = 1;
     m.z.onset_speed = 2.0;
-    csfh_model_derivatives(&m, x2, xdot);
+    csfh_model_derivatives(&m, m.time, x2, xdot);
     const double FN2 = K * pow(rho, 1.5) * (1.0 + 0.1425 * v / 2.0);
     CHECK_CLOSE(xdot[4], (FN2 - 98.1) / 10.0, 1e-9, "contact mode: F_N uses the stored onset speed");
     /* sliding to +X at the bottom: v_T = -0.3, friction +f_d F_N along t_c = [-1, 0];
      * moment a x F_T t_c = -R1 f_d F_N */
     x2[3] = 0.3;
-    csfh_model_derivatives(&m, x2, xdot);
+    csfh_model_derivatives(&m, m.time, x2, xdot);
     CHECK_CLOSE(xdot[3], -0.055 * FN2 / 10.0, 1e-9, "sliding: friction opposes the motion");
     CHECK_CLOSE(xdot[5], -0.18 * 0.055 * FN2 / 0.1617, 1e-9, "sliding: friction moment -R1 f_d F_N");
     CHECK_CLOSE(xdot[4], (FN2 - 98.1) / 10.0, 1e-9, "sliding: normal force unchanged");
@@ -530,19 +553,19 @@ static void test_events(void)
 static void rk4_step(csfh_model_t *m, double *x, double h)
 {
     double k1[6], k2[6], k3[6], k4[6], xt[6];
-    csfh_model_derivatives(m, x, k1);
+    csfh_model_derivatives(m, m->time, x, k1);
     for (int i = 0; i < 6; i++) {
         xt[i] = x[i] + 0.5 * h * k1[i];
     }
-    csfh_model_derivatives(m, xt, k2);
+    csfh_model_derivatives(m, m->time, xt, k2);
     for (int i = 0; i < 6; i++) {
         xt[i] = x[i] + 0.5 * h * k2[i];
     }
-    csfh_model_derivatives(m, xt, k3);
+    csfh_model_derivatives(m, m->time, xt, k3);
     for (int i = 0; i < 6; i++) {
         xt[i] = x[i] + h * k3[i];
     }
-    csfh_model_derivatives(m, xt, k4);
+    csfh_model_derivatives(m, m->time, xt, k4);
     for (int i = 0; i < 6; i++) {
         x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
     }
@@ -714,7 +737,7 @@ static void test_base_acceleration_and_stresses(void)
     m.z.in_contact = 1;
     m.z.onset_speed = 0.5;
     double ref[6], xdot[6], xf[6];
-    csfh_model_derivatives(&m, x, ref);
+    csfh_model_derivatives(&m, m.time, x, ref);
     /* a_base = 0 (the default) is bitwise the model without it: the values of a model whose
      * a_base was never touched, and x - 0 = x in every sum */
     CHECK_TRUE(m.a_base[0] == 0.0 && m.a_base[1] == 0.0, "a_base starts at 0");
@@ -724,21 +747,21 @@ static void test_base_acceleration_and_stresses(void)
     m.a_base[1] = -1234.5;
     f.u_in[0] = -m.p.m1 * m.a_base[0];
     f.u_in[1] = -m.p.m1 * m.a_base[1];
-    csfh_model_derivatives(&m, x, xdot);
-    csfh_model_derivatives(&f, x, xf);
+    csfh_model_derivatives(&m, m.time, x, xdot);
+    csfh_model_derivatives(&f, f.time, x, xf);
     CHECK_TRUE(memcmp(xdot, xf, sizeof(xdot)) == 0, "a_base is bitwise F_ext = -m1 a_base");
     CHECK_CLOSE(xdot[3], ref[3] - 3000.0, 1e-12, "a_base[1] decelerates body 1 along X");
     CHECK_CLOSE(xdot[4], ref[4] + 1234.5, 1e-12, "a_base[2] < 0 accelerates body 1 along +Y");
     CHECK_ABS(xdot[5], ref[5], 0.0, "the d'Alembert force acts at G1: no moment");
     /* the same smooth forces serve the Moreau stepper and the RK4 baseline */
     double Q[3];
-    csfh_model_smooth_forces(&m, x, Q);
+    csfh_model_smooth_forces(&m, m.time, x, Q);
     double Q0[3];
     m.a_base[0] = m.a_base[1] = 0.0;
-    csfh_model_smooth_forces(&m, x, Q0);
+    csfh_model_smooth_forces(&m, m.time, x, Q0);
     CHECK_CLOSE(Q[0], Q0[0] - m.p.m1 * 3000.0, 1e-14, "smooth forces: -m1 a_base, X");
     CHECK_CLOSE(Q[1], Q0[1] + m.p.m1 * 1234.5, 1e-14, "smooth forces: -m1 a_base, Y");
-    csfh_model_derivatives(&m, x, xdot);
+    csfh_model_derivatives(&m, m.time, x, xdot);
     CHECK_TRUE(memcmp(xdot, ref, sizeof(xdot)) == 0, "a_base back to 0: bitwise as before");
 
     /* outputs: stresses at the state, the pure functions' values */
@@ -798,6 +821,81 @@ static void test_base_acceleration_and_stresses(void)
     CHECK_ABS(m.out.pressure_margin, 1.0, 0.0, "zero pressure: margin 1");
 }
 
+/* ---------------------------------------------------------------------------------------- */
+/* the shock pulse (docs/model.md §14.8): a half-sine of the frame's acceleration in time */
+static void test_shock_pulse(void)
+{
+    /* the pure pulse: zero outside [t0, t0 + T], A at the middle, sin elsewhere */
+    const double A = 1500.0 * 9.80665, T = 5e-4, t0 = 2e-4;
+    CHECK_ABS(csfh_half_sine(A, T, t0, t0 - 1e-9), 0.0, 0.0, "before the pulse: 0");
+    CHECK_ABS(csfh_half_sine(A, T, t0, t0 + T + 1e-9), 0.0, 0.0, "after the pulse: 0");
+    CHECK_CLOSE(csfh_half_sine(A, T, t0, t0 + 0.5 * T), A, 1e-15, "the middle: the peak");
+    CHECK_CLOSE(csfh_half_sine(A, T, t0, t0 + 0.25 * T), A * sqrt(0.5), 1e-14, "a quarter in");
+    /* its integral, the velocity change 2 A T / pi, by the composite Simpson rule */
+    const int n = 2000;
+    double sum = 0.0;
+    for (int i = 0; i <= n; i++) {
+        const double w = (i == 0 || i == n) ? 1.0 : (i % 2 ? 4.0 : 2.0);
+        sum += w * csfh_half_sine(A, T, t0, t0 + T * i / n);
+    }
+    CHECK_CLOSE(sum * T / n / 3.0, 2.0 * A * T / TEST_PI, 1e-12, "integral = 2 A T / pi");
+
+    /* in the model: -m1 a(t) along shock.angle at G1, on top of a_base; no moment */
+    csfh_model_t m, ref;
+    setup_default(&m);
+    set_by_name(&m, "shock.peak", A);
+    set_by_name(&m, "shock.duration", T);
+    set_by_name(&m, "shock.start", t0);
+    set_by_name(&m, "shock.angle", 2.0); /* rad */
+    char msg[MSG_SIZE] = "";
+    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "a pulse prepares");
+    setup_default(&ref);
+    const double x[6] = {0.001, -0.002, 0.01, 0.05, -0.02, 0.3};
+    double xdot[6], xref[6];
+    const double t = t0 + 0.3 * T, a = A * sin(TEST_PI * 0.3);
+    csfh_model_derivatives(&m, t, x, xdot);
+    csfh_model_derivatives(&ref, t, x, xref);
+    CHECK_CLOSE(xdot[3], xref[3] - a * cos(2.0), 1e-12, "pulse: X acceleration -a cos(angle)");
+    CHECK_CLOSE(xdot[4], xref[4] - a * sin(2.0), 1e-12, "pulse: Y acceleration -a sin(angle)");
+    CHECK_ABS(xdot[5], xref[5], 0.0, "pulse: no moment");
+    /* the integrator's time decides, not the model's: m->time is not read */
+    m.time = t0 + 0.5 * T;
+    double again[6];
+    csfh_model_derivatives(&m, t, x, again);
+    CHECK_TRUE(memcmp(xdot, again, sizeof(xdot)) == 0, "the RHS takes the time it is given");
+    /* outside the pulse: bitwise the model without one */
+    csfh_model_derivatives(&m, t0 + T + 1e-6, x, xdot);
+    csfh_model_derivatives(&ref, t0 + T + 1e-6, x, xref);
+    CHECK_TRUE(memcmp(xdot, xref, sizeof(xdot)) == 0, "after the pulse: bitwise no pulse");
+    /* with a_base: the frame's acceleration output is their sum */
+    m.a_base[0] = 10.0;
+    m.a_base[1] = -20.0;
+    double af[2];
+    csfh_model_frame_acceleration(&m, t, af);
+    CHECK_CLOSE(af[0], 10.0 + a * cos(2.0), 1e-14, "a_frame[1] = a_base[1] + pulse");
+    CHECK_CLOSE(af[1], -20.0 + a * sin(2.0), 1e-14, "a_frame[2] = a_base[2] + pulse");
+    m.time = t;
+    memcpy(m.x, x, sizeof(m.x));
+    csfh_model_outputs(&m);
+    CHECK_ABS(m.out.a_frame[0], af[0], 0.0, "output a_frame[1] at the model's time");
+    CHECK_ABS(m.out.a_frame[1], af[1], 0.0, "output a_frame[2] at the model's time");
+    /* time events: the start, then the end, then none */
+    CHECK_ABS(csfh_model_next_time_event(&m, 0.0), t0, 0.0, "next time event: the start");
+    CHECK_ABS(csfh_model_next_time_event(&m, t0), t0 + T, 0.0, "at the start: the end");
+    CHECK_ABS(csfh_model_next_time_event(&m, t), t0 + T, 0.0, "inside: the end");
+    CHECK_TRUE(isinf(csfh_model_next_time_event(&m, t0 + T)), "at the end: none");
+    CHECK_TRUE(isinf(csfh_model_next_time_event(&ref, 0.0)), "no pulse: no time event");
+    /* bad pulse parameters are refused, naming the variable */
+    setup_default(&m);
+    set_by_name(&m, "shock.duration", -1e-4);
+    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), -1, "negative duration refused");
+    CHECK_STR_CONTAINS(msg, "shock.duration", "names shock.duration");
+    setup_default(&m);
+    set_by_name(&m, "shock.peak", -1.0);
+    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), -1, "negative peak refused");
+    CHECK_STR_CONTAINS(msg, "shock.peak", "names shock.peak");
+}
+
 int main(void)
 {
     test_defaults_prepare();
@@ -809,5 +907,6 @@ int main(void)
     test_start_check_peaks_and_numbers();
     test_each_law_uses_its_stiffness();
     test_base_acceleration_and_stresses();
+    test_shock_pulse();
     return TEST_SUMMARY();
 }

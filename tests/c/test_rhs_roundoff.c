@@ -123,8 +123,8 @@ static void test_rhs(double s1x, double s1y)
         }
         double xdot[6], Qs[3], Qc[3], Qc_scale[3];
         m.counters.rhs = 0;
-        csfh_model_derivatives(&m, x, xdot);
-        csfh_model_smooth_forces(&m, x, Qs);
+        csfh_model_derivatives(&m, 0.0, x, xdot);
+        csfh_model_smooth_forces(&m, 0.0, x, Qs);
         reference_contact(&m, x, Qc, Qc_scale);
         touching += Qc[0] != 0.0 || Qc[1] != 0.0;
         const double ref[3] = {(Qs[0] + Qc[0]) / m.p.m1, (Qs[1] + Qc[1]) / m.p.m1,

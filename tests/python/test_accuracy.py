@@ -111,6 +111,9 @@ def test_accuracy_report_quick(tmp_path: Path) -> None:
     assert observed_order(me, "contact_time") > 0.5
     text = (tmp_path / "report.md").read_text()
     assert "Observed order of convergence" in text and "What the numbers show" in text
+    # one output set (csfh.output): the manifest lists every file of the report
+    manifest = json.loads((tmp_path / ".csfh" / "accuracy.json").read_text())
+    assert set(manifest["files"]) == {p.name for p in tmp_path.iterdir() if p.is_file()}
 
 
 def test_reduced_stress_suite_has_no_failure(tmp_path: Path) -> None:
@@ -124,3 +127,5 @@ def test_reduced_stress_suite_has_no_failure(tmp_path: Path) -> None:
     # the event-driven FMU integrators and Moreau never hit a limit in the reduced suite
     assert all(r.verdict == "pass" for r in runs if r.integrator != "RK4")
     assert (tmp_path / "stress.md").exists() and (tmp_path / "stress.json").exists()
+    manifest = json.loads((tmp_path / ".csfh" / "stress.json").read_text())
+    assert set(manifest["files"]) == {"stress.md", "stress.json"}

@@ -123,6 +123,8 @@ def test_cli_cosim_writes_csv_and_figure(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     assert "combdrive / cosim-fmpy-jacobi:" in proc.stdout and "contacts" in proc.stdout
     csv = out / "cosim_fmpy.csv"
+    manifest = (out / ".csfh" / "cosim.fmpy.json").read_text()  # one output set (csfh.output)
+    assert '"cosim_fmpy.csv"' in manifest and '"cosim_fmpy.png"' in manifest
     header = csv.read_text().splitlines()[0].split(",")
     assert header[:3] == ["t [s]", "x [m]", "y [m]"]
     assert {"V [V]", "F_act [N]", "F_x [N]", "F_y [N]", "M [N m]", "F_N [N]"} <= set(header)

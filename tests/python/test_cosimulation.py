@@ -784,3 +784,39 @@ def test_auto_goes_back_to_rk45_where_bdf_is_no_faster(
     steps = {m: r[0] for m, r in runs.items()}
     assert steps["auto"] <= steps["RK45"] + trials * 2 * AUTO_WINDOW, (steps, trials)
     assert steps["auto"] < 0.85 * steps["BDF"], steps
+
+
+def test_autos_decisions_do_not_depend_on_the_communication_grid(
+    make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int]
+) -> None:
+    """auto decides at the end of every integrator step, also of a step that reaches or passes a
+    communication point (it then switches there, or in the communication step that contains the
+    step's end). On the undamped pendulum of the test above (several trials of BDF and returns
+    to RK45 in 1 s), 1e-2 s communication steps and a random grid of 1e-5 s to 0.05 s steps give
+    the same decisions at the same times, the same number of integrator steps and the same state
+    at 1 s to round-off. (Before, a step that reached a communication point was never judged:
+    the window was judged one step later, and the grid changed the trajectory.)"""
+    scene = pendulum_scene(1.0, 0.5)
+    lines = re.compile(r"t = \S+: auto: .*")
+
+    def auto_run(points: np.ndarray) -> tuple[list[str], int, np.ndarray]:
+        fmu, log = cs_instance(
+            make_fmu, model_description, scene, tolerance=1e-9, law="LN_cylinders", method="auto"
+        )
+        run(fmu, points)
+        n_steps = fmu.getInteger([vr["diagnostics.integrator_steps"]])[0]
+        return (
+            [m.group(0) for m in map(lines.match, log.text().splitlines()) if m],
+            n_steps,
+            states(fmu, vr),
+        )
+
+    rng = np.random.default_rng(11)
+    sizes = np.exp(rng.uniform(np.log(1e-5), np.log(0.05), size=400))
+    random_points = np.cumsum(sizes)
+    random_points = np.append(random_points[random_points < 1.0], 1.0)
+    coarse, fine = auto_run(grid(1e-2, 1.0)), auto_run(random_points)
+    assert len(coarse[0]) >= 3, coarse[0]
+    assert fine[0] == coarse[0]
+    assert fine[1] == coarse[1]
+    np.testing.assert_allclose(fine[2], coarse[2], rtol=1e-12, atol=1e-15)

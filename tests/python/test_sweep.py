@@ -178,6 +178,11 @@ def test_quick_sweep_writes_its_report(serial_sweep: Path) -> None:
     for model in data["models"]:
         assert data["runs"][model]["h"]["combined"]["x"]["level"] == 3, model
     assert data["run"]["tasks"] == 4 * 5
+    # the report is one output set (csfh.output); the result store is not part of it
+    manifest = json.loads((serial_sweep / ".csfh" / "sweep.json").read_text())
+    assert set(manifest["files"]) == {"sweep.md", "sweep.json"} | {
+        p.name for p in serial_sweep.glob("sweep_*.png")
+    }
 
 
 def test_local_processes_give_the_serial_results(serial_sweep: Path, tmp_path: Path) -> None:
@@ -213,11 +218,14 @@ def test_interrupted_sweep_keeps_its_results_and_resumes(tmp_path: Path) -> None
     with pytest.raises(KeyboardInterrupt):
         run_tasks(tasks, store, workers=1, quiet=True, batch=1, on_result=interrupt)
     assert len(ResultStore(tmp_path)) == 2
-    # a torn last line (killed while writing) is dropped, the file stays line-aligned
+    # a torn last line (killed while writing) is set aside, reported, and the file stays
+    # line-aligned
     with open(tmp_path / "tasks.jsonl", "a", encoding="utf-8") as fh:
         fh.write('{"key": "abc", "summ')
     store = ResultStore(tmp_path)
     assert len(store) == 2
+    assert len(store.problems) == 1 and "line 3: incomplete" in store.problems[0]
+    assert (tmp_path / "tasks.rejected.jsonl").read_text() == '{"key": "abc", "summ\n'
     assert (tmp_path / "tasks.jsonl").read_bytes().endswith(b"\n")
     report = run_tasks(tasks, store, workers=1, quiet=True)
     assert (report.reused, report.computed, report.total) == (2, 4, 6)
@@ -340,6 +348,8 @@ def test_tolerance_study_is_reproducible(tmp_path: Path) -> None:
     )
     for name in ("tolerance.md", "tolerance_histograms.png"):
         assert (tmp_path / "a" / name).stat().st_size > 0
+    manifest = json.loads((tmp_path / "a" / ".csfh" / "tolerance.json").read_text())
+    assert set(manifest["files"]) == {"tolerance.md", "tolerance.json", "tolerance_histograms.png"}
 
 
 @pytest.mark.parametrize(

@@ -5,19 +5,20 @@ processes, or a Dask distributed cluster. Each computes the tasks not yet in the
 from __future__ import annotations
 
 import hashlib
-import json
 import math
 import multiprocessing
 import os
+import signal
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
 from ..progress import Progress
 from .store import ResultStore
-from .tasks import Result, Task, run_chunk, scene_fingerprint, worker_init
+from .tasks import Result, Task, batch_group, run_chunk, worker_init
 
 
 def default_workers() -> int:
@@ -28,18 +29,14 @@ def default_workers() -> int:
 
 
 def make_chunks(tasks: Sequence[Task], workers: int, batch: int = 64) -> list[list[Task]]:
-    """Moreau tasks grouped by scene and settings into batches (at most `batch`, and small
-    enough to keep every worker busy); event-driven tasks one per chunk. Deterministic."""
+    """Tasks that run as one batch (Moreau, and co-simulation: `batch_group`) grouped into
+    chunks of at most `batch`, small enough to keep every worker busy; model-exchange tasks one
+    per chunk. Deterministic."""
     groups: dict[tuple[Any, ...], list[Task]] = {}
     chunks: list[list[Task]] = []
     for t in tasks:
-        if t.model == "Moreau":
-            gk = (
-                json.dumps(scene_fingerprint(t.scene), sort_keys=True),
-                t.stop_time,
-                t.output_interval,
-                t.signals,
-            )
+        gk = batch_group(t)
+        if gk is not None:
             groups.setdefault(gk, []).append(t)
         else:
             chunks.append([t])
@@ -118,6 +115,36 @@ def run_tasks(
     )
 
 
+@contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT held back in this thread (delivered when the block ends, never lost). Processes
+    started meanwhile inherit the block: a Ctrl-C while a worker starts up and imports csfh
+    stays pending there until `worker_init` ignores it, instead of a KeyboardInterrupt traceback
+    from every worker."""
+    if not hasattr(signal, "pthread_sigmask"):  # not POSIX
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """End a pool now: pending chunks cancelled, running ones abandoned (the workers ignore
+    Ctrl-C, so they are terminated), the executor's own thread left to wind down without errors.
+    What was accepted is in the store already."""
+    # the pool's worker processes (a private attribute: the public API cannot end them)
+    workers = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in workers:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in workers:
+        proc.join(timeout=10)
+
+
 def _run_processes(
     chunks: list[list[Task]], workers: int, accept: Callable[[Iterable[Result]], None]
 ) -> None:
@@ -131,14 +158,13 @@ def _run_processes(
         queue = sorted(chunks, key=len)
         while queue or futures:
             while queue and len(futures) < 2 * workers:
-                futures.add(pool.submit(run_chunk, queue.pop()))
+                with _sigint_blocked():  # a submit may start a worker process
+                    futures.add(pool.submit(run_chunk, queue.pop()))
             finished, futures = wait(futures, return_when=FIRST_COMPLETED)
             for fut in finished:
                 accept(fut.result())
     except BaseException:
-        for fut in futures:
-            fut.cancel()
-        pool.shutdown(wait=False, cancel_futures=True)
+        _stop_pool(pool)
         raise
     pool.shutdown(wait=True)
 

@@ -6,7 +6,9 @@ binaries), so a re-run with the same output directory skips the tasks already do
 computed by the same function, `run_chunk`, from the same inputs, in whichever process.
 
 Moreau tasks of the same scene and settings are grouped into chunks and run as one batch in the C
-core (csfh.runners.moreau_batch); event-driven tasks run through the FMU one at a time."""
+core (csfh.runners.moreau_batch); so are event-driven co-simulation tasks (interface "cs"), run by
+the batch master in the FMU's own binary (csfh.runners.cs_batch, bitwise the single runs);
+model-exchange tasks run through fmpy one at a time."""
 
 from __future__ import annotations
 
@@ -25,7 +27,8 @@ import numpy as np
 
 from ..model.scene import Scene
 
-SCHEMA = 2  # 2: forces of the event-driven runs as interval peaks
+SCHEMA = 3  # 2: forces of the event-driven runs as interval peaks; 3: co-simulation summaries
+# from the FMU's peak outputs and contact count, stress peaks
 SIGNALS = ("x", "y", "theta", "F_N", "F_T")
 """Output signals kept on the grid for sweeps (m, m, rad, N, N). x, y, theta are the values at
 the grid points; F_N and F_T the value of largest magnitude in each output interval (t_k-1, t_k]
@@ -57,22 +60,45 @@ class Task:
         return dict(self.parameters)
 
 
-def scene_fingerprint(scene: Scene) -> dict[str, Any]:
-    """Everything of a scene that can change a result (not its name, description or source)."""
+_FINGERPRINTS: dict[int, tuple[Scene, dict[str, Any], str]] = {}
+"""Fingerprints of the scenes seen last, by identity (a study's thousands of tasks share one
+Scene object; scenes are immutable): (the scene, its fingerprint, as sorted JSON)."""
+
+
+def _fingerprint(scene: Scene) -> tuple[dict[str, Any], str]:
+    hit = _FINGERPRINTS.get(id(scene))
+    if hit is not None and hit[0] is scene:
+        return hit[1], hit[2]
     data = asdict(scene)
     for k in ("name", "description", "source", "models"):
         data.pop(k, None)
-    return json.loads(json.dumps(data, sort_keys=True, default=list))
+    text = json.dumps(data, sort_keys=True, default=list)
+    fingerprint = json.loads(text)
+    if len(_FINGERPRINTS) > 256:
+        _FINGERPRINTS.clear()
+    _FINGERPRINTS[id(scene)] = (scene, fingerprint, json.dumps(fingerprint, sort_keys=True))
+    return fingerprint, _FINGERPRINTS[id(scene)][2]
+
+
+def scene_fingerprint(scene: Scene) -> dict[str, Any]:
+    """Everything of a scene that can change a result (not its name, description or source).
+    The dict is shared between the calls for one scene: do not modify it."""
+    return _fingerprint(scene)[0]
 
 
 @cache
 def binaries_fingerprint() -> str:
-    """Hash of the FMU and the core library in use: a rebuilt model invalidates old results."""
-    from ..paths import core_library_path, fmu_path
+    """Hash of the FMU, the core library and the batch master in use: a rebuilt model
+    invalidates old results."""
+    from ..paths import batch_library_path, core_library_path, fmu_path
 
     h = hashlib.sha256()
     for path in (fmu_path(), core_library_path()):
         h.update(Path(path).read_bytes())
+    try:
+        h.update(Path(batch_library_path()).read_bytes())
+    except FileNotFoundError:  # a build without the FMU: no co-simulation batches
+        pass
     return h.hexdigest()[:16]
 
 
@@ -117,15 +143,47 @@ only part of a result that depends on where and when the task ran."""
 
 
 def _summary(
-    first: float | None, contacts: int, peak_fn: float, peak_ft: float, steps: int
+    first: float | None,
+    contacts: int,
+    peak_fn: float,
+    peak_ft: float,
+    steps: int,
+    stresses: tuple[float, float] | None = None,
 ) -> dict[str, Any]:
-    return {
+    out: dict[str, Any] = {
         "first_contact": first,
         "contacts": int(contacts),
         "peak_F_N": float(peak_fn),
         "peak_abs_F_T": float(peak_ft),
         "steps": int(steps),
     }
+    if stresses is not None:  # co-simulation: the peak flexure stress and contact pressure, Pa
+        out["peak_flexure_stress"] = float(stresses[0])
+        out["peak_contact_pressure"] = float(stresses[1])
+    return out
+
+
+def _run_summary(s: dict[str, Any]) -> dict[str, Any]:
+    """The task summary of a run summary (Trajectory.summary, CsBatchResult.summary)."""
+    stresses = None
+    if "max_flexure_stress" in s:
+        stresses = (s["max_flexure_stress"], s["max_contact_pressure"])
+    return _summary(
+        s["first_contact_time"], s["contacts"], s["max_F_N"], s["max_abs_F_T"], s["steps"], stresses
+    )
+
+
+def _signals(task: Task, tr: Any) -> dict[str, np.ndarray] | None:
+    """The output signals of a run on the task's grid (see SIGNALS), or None."""
+    if not task.signals:
+        return None
+    g = grid(task.stop_time, task.output_interval)
+    sig = {name: np.interp(g, tr.t, tr[name]) for name in SIGNALS}
+    for name in ("F_N", "F_T"):
+        t_all = np.concatenate([tr.t, tr.steps["t"]]) if tr.steps else tr.t
+        f_all = np.concatenate([tr[name], tr.steps[name]]) if tr.steps else tr[name]
+        sig[name] = interval_peaks(g, sig[name], t_all, f_all)
+    return sig
 
 
 def _run_fmu(task: Task) -> Result:
@@ -151,19 +209,30 @@ def _run_fmu(task: Task) -> Result:
                 max_step_records=1_000_000,
             )
         wall = time.perf_counter() - wall
-    s = tr.summary()
-    summary = _summary(
-        s["first_contact_time"], s["contacts"], s["max_F_N"], s["max_abs_F_T"], s["steps"]
+    return task.key, _run_summary(tr.summary()), _signals(task, tr), wall
+
+
+def _run_cs_batch(tasks: Sequence[Task]) -> list[Result]:
+    """Co-simulation tasks of one scene, model, horizon and grid, with the same parameter
+    names, as one call into the batch master: the same summaries and signals as _run_fmu gives
+    each of them alone (bitwise, tested)."""
+    from ..runners.cs_batch import cs_batch
+
+    first = tasks[0]
+    batch = cs_batch(
+        first.scene,
+        first.model,
+        [t.overrides() for t in tasks],
+        stop_time=first.stop_time,
+        communication_step=first.output_interval,
+        record=first.signals,
     )
-    sig = None
-    if task.signals:
-        g = grid(task.stop_time, task.output_interval)
-        sig = {name: np.interp(g, tr.t, tr[name]) for name in SIGNALS}
-        for name in ("F_N", "F_T"):
-            t_all = np.concatenate([tr.t, tr.steps["t"]]) if tr.steps else tr.t
-            f_all = np.concatenate([tr[name], tr.steps[name]]) if tr.steps else tr[name]
-            sig[name] = interval_peaks(g, sig[name], t_all, f_all)
-    return task.key, summary, sig, wall
+    wall = batch.wall_time / len(tasks)
+    out: list[Result] = []
+    for i, task in enumerate(tasks):
+        sig = _signals(task, batch.trajectory(i)) if task.signals else None
+        out.append((task.key, _run_summary(batch.summary(i)), sig, wall))
+    return out
 
 
 def _run_moreau(tasks: Sequence[Task]) -> list[Result]:
@@ -215,9 +284,51 @@ def run_chunk(tasks: Sequence[Task]) -> list[Result]:
         )
     if tasks[0].model == "Moreau":
         return _run_moreau(tasks)
+    if tasks[0].interface == "cs" and batchable(tasks) and _batch_master_available():
+        return _run_cs_batch(tasks)
     return [_run_fmu(t) for t in tasks]
 
 
+def batch_group(task: Task) -> tuple[Any, ...] | None:
+    """The group of tasks that run together as one batch (None: alone): Moreau tasks of one
+    scene and settings; co-simulation tasks of one scene, model and settings that override the
+    same parameters (the batch master sets the same variables in every run)."""
+    base = (
+        _fingerprint(task.scene)[1],
+        task.stop_time,
+        task.output_interval,
+        task.signals,
+    )
+    if task.model == "Moreau":
+        return ("Moreau", *base)
+    if task.interface == "cs":
+        return ("cs", task.model, tuple(sorted(k for k, _ in task.parameters)), *base)
+    return None
+
+
+@cache
+def _batch_master_available() -> bool:
+    """Whether libcsfh_batch.so is there (a build without it runs co-simulation tasks one by
+    one through fmpy, with the same results)."""
+    from ..paths import batch_library_path
+
+    try:
+        batch_library_path()
+    except FileNotFoundError:
+        return False
+    return True
+
+
+def batchable(tasks: Sequence[Task]) -> bool:
+    """Whether the tasks form one batch."""
+    group = batch_group(tasks[0])
+    return group is not None and all(batch_group(t) == group for t in tasks)
+
+
 def worker_init() -> None:
-    # Ctrl-C goes to the whole process group: let the parent decide (it keeps what is done)
+    """Ctrl-C goes to the whole process group: a worker ignores it and the parent decides (it
+    keeps what is done and ends the workers). The parent starts workers with SIGINT blocked, so
+    that one during the start-up is discarded here too."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})

@@ -10,11 +10,17 @@ from .common import SCENE_HELP, add_command, add_quiet, out_dir, positive_float,
 
 
 def _cmd_accuracy(args: argparse.Namespace) -> int:
-    from ..model.scene import load_scene
+    from ..errors import SceneError
+    from ..model.scene import check_horizon, load_scene
     from ..studies.accuracy.report import write_report
     from ..studies.accuracy.study import DEFAULT_SETTINGS, QUICK_SETTINGS, run_study
 
     scene = load_scene(args.scene)
+    if args.stop_time is not None:
+        try:
+            check_horizon(args.stop_time, scene.integrator.output_interval, stop_key="--stop-time")
+        except SceneError as exc:
+            raise SceneError(f"{scene.source}: {exc}") from None
     out = out_dir(args, scene.name, "accuracy")
     settings = QUICK_SETTINGS if args.quick else DEFAULT_SETTINGS
     study = run_study(

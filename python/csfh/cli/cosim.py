@@ -15,17 +15,18 @@ def _cmd_cosim(args: argparse.Namespace) -> int:
     from ..cosim.run import cosimulate
     from ..model.instance import clearance
     from ..model.scene import load_scene
+    from ..output import output_set
 
     scene = load_scene(args.scene)
     out = out_dir(args, scene.name)
-    out.mkdir(parents=True, exist_ok=True)
     tr = cosimulate(
         scene, engine=args.engine, step=args.step, stop_time=args.stop_time, quiet=args.quiet
     )
     engine = tr.stats["engine"]
-    csv = write_csv(tr, out / f"cosim_{engine}.csv")
     title = f"scene {scene.name} ({tr.stats['integrator']}):\n{scene.description}"
-    png = plot(tr, out / f"cosim_{engine}.png", title, clearance(scene))
+    with output_set(out, f"cosim.{engine}"):
+        csv = write_csv(tr, out / f"cosim_{engine}.csv")
+        png = plot(tr, out / f"cosim_{engine}.png", title, clearance(scene))
     first = f" (first at {tr.contacts[0]:.4f} s)" if len(tr.contacts) else ""
     print(
         f"{scene.name} / {tr.model}: {len(tr.contacts)} contacts{first}, "

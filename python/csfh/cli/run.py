@@ -12,12 +12,16 @@ from .common import SCENE_HELP, add_command, add_quiet, out_dir
 def _cmd_info(args: argparse.Namespace) -> int:
     from .._version import __version__
     from ..model import model_info
-    from ..paths import core_library_path, fmu_path
+    from ..paths import batch_library_path, core_library_path, fmu_path
 
     md = model_info.model_description()
     print(f"csfh         {__version__}")
     print(f"FMU          {fmu_path()}")
     print(f"core library {core_library_path()}")
+    try:
+        print(f"batch master {batch_library_path()}")
+    except FileNotFoundError:
+        print("batch master not built (co-simulation tasks run one by one through fmpy)")
     print(f"model        {md.modelName} {md.version} (FMI {md.fmiVersion}, GUID {md.guid})")
     print(f"interfaces   {'ME ' if md.modelExchange else ''}{'CS' if md.coSimulation else ''}")
     print(f"variables    {len(md.modelVariables)}")
@@ -27,13 +31,14 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from ..model.scene import load_scene
+    from ..output import output_set
     from ..runners.simulate import simulate
 
     scene = load_scene(args.scene)
     out = out_dir(args, scene.name)
-    out.mkdir(parents=True, exist_ok=True)
     tr = simulate(scene, args.law, interface=args.interface, quiet=args.quiet)
-    path = tr.write_csv(out / f"{tr.model}.csv")
+    with output_set(out, f"run.{tr.model}"):
+        path = tr.write_csv(out / f"{tr.model}.csv")
     s = tr.summary()
     first = s["first_contact_time"]
     print(

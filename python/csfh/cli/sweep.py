@@ -37,7 +37,8 @@ def _execution_options(p: argparse.ArgumentParser, command: str) -> None:
         choices=("me", "cs"),
         default="me",
         help="FMU interface of the event-driven models: me = model exchange with fmpy's "
-        "CVode, events located exactly; cs = co-simulation, the integrator inside the FMU",
+        "CVode, events located exactly, one run at a time; cs = co-simulation, the integrator "
+        "inside the FMU, the runs batched (tens of times faster)",
     )
     p.add_argument(
         "--stop-time",
@@ -135,7 +136,10 @@ def _check_models(models: list[str] | None, default: tuple[str, ...]) -> tuple[s
 
 def _interface_text(interface: str, rtol: float) -> str:
     if interface == "cs":
-        return f"co-simulation (the integrator inside the FMU), rtol {rtol:g}"
+        return (
+            f"co-simulation (the integrator inside the FMU; the runs batched in the FMU's own "
+            f"binary by the batch master), rtol {rtol:g}"
+        )
     return f"model exchange with fmpy's CVode (BDF, events by root finding), rtol {rtol:g}"
 
 
@@ -144,6 +148,14 @@ def _run(tasks: list[Any], out: Path, args: argparse.Namespace, label: str) -> A
     from ..batch.store import ResultStore
 
     store = ResultStore(out)
+    for problem in store.problems[:10]:
+        print(f"csfh: warning: {problem}", file=sys.stderr)
+    if len(store.problems) > 10:
+        print(
+            f"csfh: warning: {len(store.problems) - 10} more records skipped "
+            f"(all of them are in {out / 'tasks.rejected.jsonl'})",
+            file=sys.stderr,
+        )
     try:
         report = run_tasks(
             tasks,
@@ -165,6 +177,22 @@ def _run(tasks: list[Any], out: Path, args: argparse.Namespace, label: str) -> A
     return store, report
 
 
+def _check_horizon(scene: Any, stop_time: float, option: bool) -> None:
+    """The scene's limits (csfh.model.scene) on a horizon that --stop-time may have changed."""
+    from ..errors import SceneError
+    from ..model.scene import check_horizon
+
+    try:
+        check_horizon(
+            stop_time,
+            scene.integrator.output_interval,
+            scene.integrator.moreau_h,
+            stop_key="--stop-time" if option else "stop_time",
+        )
+    except SceneError as exc:
+        raise SceneError(f"{scene.source or scene.name}: {exc}") from None
+
+
 def _run_time_sum(tasks: list[Any], store: Any) -> float:
     """Wall time of the runs themselves, summed over the tasks (whenever they were computed)."""
     keys = {t.key for t in tasks}
@@ -183,6 +211,7 @@ def _notes(args: argparse.Namespace) -> str | None:
 def cmd_sweep(args: argparse.Namespace) -> int:
     from ..model import model_info
     from ..model.scene import load_scene
+    from ..output import output_set
     from ..studies.sweep import analysis, parameters, spec
     from ..studies.sweep.figures import plot_departure, plot_examples, plot_levels
     from ..studies.sweep.report import write_json_report, write_markdown
@@ -204,6 +233,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             else tuple(p.key for p in parameters.PARAMETERS)
         )
     stop_time = args.stop_time or (0.2 if args.quick else scene.stop_time)
+    _check_horizon(scene, stop_time, args.stop_time is not None)
     dt = scene.integrator.output_interval
     if stop_time / dt < 10:
         raise CliError(f"horizon {stop_time:g} s is shorter than 10 output intervals ({dt:g} s)")
@@ -243,17 +273,18 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         "run_time_sum": _run_time_sum(tasks, store),
         "notes": notes,
     }
-    figures = [
-        plot_levels(out / "sweep_levels.png", result),
-        plot_departure(out / "sweep_departure.png", result),
-    ]
-    example = plot_examples(out / "sweep_examples.png", sweep_spec, tasks, store, result)
-    if example is not None:
-        figures.append(example)
-    write_json_report(
-        out / "sweep.json", result, {k: v for k, v in run_info.items() if k != "notes"}
-    )
-    write_markdown(out / "sweep.md", result, run_info, figures)
+    with output_set(out, "sweep"):  # the report replaces the previous one as a whole
+        figures = [
+            plot_levels(out / "sweep_levels.png", result),
+            plot_departure(out / "sweep_departure.png", result),
+        ]
+        example = plot_examples(out / "sweep_examples.png", sweep_spec, tasks, store, result)
+        if example is not None:
+            figures.append(example)
+        write_json_report(
+            out / "sweep.json", result, {k: v for k, v in run_info.items() if k != "notes"}
+        )
+        write_markdown(out / "sweep.md", result, run_info, figures)
     if not args.quiet:
         for group, c in result["comparison"].items():
             print(
@@ -271,6 +302,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 def cmd_tolerance(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
+    from ..output import output_set
     from ..studies.tolerance import study as tolerance
     from ..studies.tolerance.report import plot_histograms, write_json_report, write_markdown
 
@@ -284,6 +316,7 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         models=_check_models(args.models, study.models),
     )
     stop_time = args.stop_time or study.scene.stop_time
+    _check_horizon(study.scene, stop_time, args.stop_time is not None)
     samples = [tolerance.sample(study, k) for k in range(study.runs)]
     tolerance.check_samples(study, samples)
     notes = _notes(args)
@@ -311,9 +344,10 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         "wall_time": time.perf_counter() - wall,
         "run_time_sum": _run_time_sum(tasks, store),
     }
-    fig = plot_histograms(out / "tolerance_histograms.png", study, result)
-    write_json_report(out / "tolerance.json", study, result, run_info)
-    write_markdown(out / "tolerance.md", study, result, {**run_info, "notes": notes}, fig)
+    with output_set(out, "tolerance"):  # the report replaces the previous one as a whole
+        fig = plot_histograms(out / "tolerance_histograms.png", study, result)
+        write_json_report(out / "tolerance.json", study, result, run_info)
+        write_markdown(out / "tolerance.md", study, result, {**run_info, "notes": notes}, fig)
     if not args.quiet:
         for model, r in result["models"].items():
             st = r["stats"]

@@ -9,9 +9,11 @@ from typing import Any
 
 from ..errors import SceneError
 from ..model.cosim_section import CosimSettings, parse_cosim
-from ..model.scene import Scene, load_scene
+from ..model.scene import Scene, check_horizon, load_scene
 from ..progress import Progress
+from ..runners.simulate import with_source
 from ..trajectory import Trajectory
+from .coupling import CosimError
 from .fmpy_master import run_fmpy
 from .libcosim_master import run_libcosimpy
 
@@ -52,8 +54,21 @@ def cosimulate(
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     settings = cosim_settings(scene, engine=engine, step=step, ordering=ordering)
+    t_end = scene.stop_time if stop_time is None else stop_time
+    where = scene.source or scene.name
+    try:
+        check_horizon(
+            t_end,
+            settings.step,
+            stop_key="stop_time" if stop_time is None else "stop time",
+            interval_key="cosim.step" if step is None else "step",
+        )
+    except SceneError as exc:
+        raise SceneError(f"{where}: {exc}") from None
     progress = Progress(f"{scene.name}: cosim {settings.engine}", quiet=quiet)
     try:
         return RUNNERS[settings.engine](scene, settings, stop_time=stop_time, progress=progress)
+    except CosimError as exc:
+        raise with_source(exc, scene) from None
     finally:
         progress.close()

@@ -4,6 +4,8 @@ validation and the co-simulation masters use it)."""
 
 from __future__ import annotations
 
+import itertools
+import weakref
 from functools import cache
 from typing import Any
 
@@ -30,8 +32,12 @@ def description(path: str) -> Any:
     return read_model_description(path)
 
 
-class _Log:
-    """FMI logger callbacks that keep the messages (for error reports)."""
+class FmuLog:
+    """FMI logger callbacks that keep an instance's error messages (for error reports).
+
+    fmpy's native logger proxy (which formats the variadic message) holds one Python logger for
+    the whole process, the last one registered; so every instance registers the same dispatcher,
+    and the FMU's componentEnvironment (a number per log) says which log a message belongs to."""
 
     def __init__(self) -> None:
         from ctypes import byref
@@ -41,21 +47,46 @@ class _Log:
             fmi2CallbackAllocateMemoryTYPE,
             fmi2CallbackFreeMemoryTYPE,
             fmi2CallbackFunctions,
-            fmi2CallbackLoggerTYPE,
         )
         from fmpy.logging import addLoggerProxy
 
         self.errors: list[str] = []
+        self.key = next(_LOG_KEYS)
+        _LOGS[self.key] = weakref.ref(self)
         self.callbacks = fmi2CallbackFunctions()
-        self._logger = fmi2CallbackLoggerTYPE(self._log)
-        self.callbacks.logger = self._logger
+        self.callbacks.logger = _dispatcher()
+        self.callbacks.componentEnvironment = self.key
         self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
         addLoggerProxy(byref(self.callbacks))
 
-    def _log(self, env: object, instance: bytes, status: int, category: bytes, msg: bytes) -> None:
+    def add(self, status: int, msg: bytes) -> None:
         if status >= 3:  # fmi2Error, fmi2Fatal
-            self.errors.append(msg.decode(errors="replace"))
+            self.errors.append(" ".join(msg.decode(errors="replace").split()))
+
+    def reason(self, fallback: str) -> str:
+        """The FMU's error messages so far on one line (a failed step logs the integrator's
+        reason first, then what the FMU did), else `fallback`."""
+        return "; ".join(self.errors) if self.errors else fallback
+
+
+_LOGS: dict[int, weakref.ref[FmuLog]] = {}
+_LOG_KEYS = itertools.count(1)
+
+
+def _dispatch(env: int | None, instance: bytes, status: int, category: bytes, msg: bytes) -> None:
+    ref = _LOGS.get(env or 0)
+    log = ref() if ref is not None else None
+    if log is not None:
+        log.add(status, msg)
+
+
+@cache
+def _dispatcher() -> Any:
+    """The one logger callback of the process (kept alive here)."""
+    from fmpy.fmi2 import fmi2CallbackLoggerTYPE
+
+    return fmi2CallbackLoggerTYPE(_dispatch)
 
 
 class Slave:
@@ -67,7 +98,7 @@ class Slave:
         md = description(path)
         self.name = name
         self.vars = {v.name: v for v in md.modelVariables}
-        self.log = _Log()
+        self.log = FmuLog()
         self.fmu = FMU2Slave(
             guid=md.guid,
             unzipDirectory=unzipped(path),
@@ -90,9 +121,8 @@ class Slave:
                 self.fmu.setInteger([self.vr(name)], [int(value)])
 
     def message(self, exc: Exception) -> str:
-        """What went wrong in this instance: the FMU's last error message, else the exception."""
-        detail = self.log.errors[-1] if self.log.errors else str(exc)
-        return f"{self.name}: {detail}"
+        """What went wrong in this instance: the FMU's error messages, else the exception."""
+        return f"{self.name}: {self.log.reason(str(exc))}"
 
     def free(self) -> None:
         try:

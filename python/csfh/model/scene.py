@@ -1,5 +1,21 @@
 """Scenes are data: a TOML file names the initial state, the stop time, the preset, which parts of
-the model are on, parameter overrides, constant inputs and integrator settings.
+the model are on, parameter overrides, constant inputs and integrator settings (the keys below).
+
+A scene is refused when it is loaded, with one line naming the file, the key and the value, when
+it leaves these limits (so that no scene exhausts the memory or runs for hours by accident):
+
+* ``name``: one plain file name (it names the output directory results/NAME): no ``/`` or
+  backslash, not starting with ``.``, no control characters, at most 100 characters;
+* ``stop_time`` <= 1e4 s (every transient of the hinge decays within seconds);
+* ``output_interval`` <= ``stop_time``, and at most 1e6 output samples (``stop_time /
+  output_interval``: each is a row of the tables);
+* ``moreau_h`` <= ``stop_time`` (at least one step), and at most 1e9 Moreau steps
+  (``stop_time / moreau_h``: about 100 s of stepping);
+* ``rtol`` in [1e-14, 1) (tighter than 1e-14 cannot be met in double precision);
+* the initial state: speeds ``|vx|``, ``|vy|`` <= 100 m/s and ``|omega|`` <= 1000 rad/s (the
+  contact laws are quasi-static: they hold for impact speeds far below these), ``|theta|`` <= pi,
+  and a start in contact at most as deep as ``contact.max_initial_indentation`` (the FMU's
+  check) and 1 % of ``contact.R1`` (Hertz contact assumes indentations small against the radii).
 
     name = "csfh"
     description = "..."
@@ -49,6 +65,26 @@ from .presets import PRESETS
 
 BUILTIN_SCENES = ("central", "asymmetric", "csfh", "mems", "combdrive")  # combdrive: `csfh cosim`
 STICK_RULES = ("paper", "memory")
+
+# the limits of a scene (module docstring)
+MAX_NAME_LENGTH = 100
+MAX_STOP_TIME = 1e4
+"""s: the longest run."""
+MAX_OUTPUT_SAMPLES = 1_000_000
+"""The most output rows of a run (stop_time / output_interval, or / the communication step)."""
+MAX_MOREAU_STEPS = 1_000_000_000
+"""The most Moreau steps of a run (stop_time / moreau_h)."""
+MIN_RTOL = 1e-14
+"""The tightest relative tolerance of CVODE."""
+MAX_SPEED = 100.0
+"""m/s: the largest initial |vx|, |vy|."""
+MAX_ANGULAR_SPEED = 1000.0
+"""rad/s: the largest initial |omega|."""
+MAX_ROTATION = math.pi
+"""rad: the largest initial |theta|."""
+MAX_INDENTATION_OVER_R1 = 0.01
+"""The deepest start in contact, as a fraction of contact.R1 (besides the FMU's
+contact.max_initial_indentation)."""
 
 
 @dataclass(frozen=True)
@@ -188,8 +224,7 @@ def scene_from_dict(data: dict[str, Any], source: str = "<dict>") -> Scene:
 def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
     _table("scene", data, _TOP_KEYS)
     name = data.get("name", Path(source).stem)
-    if not isinstance(name, str) or not name:
-        raise SceneError("name must be a non-empty string")
+    check_name(name)
     preset = data.get("preset", "paper")
     if preset not in PRESETS:
         raise SceneError(f"preset = {preset!r} is not one of {', '.join(PRESETS)}")
@@ -229,8 +264,12 @@ def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
         v_eps=_number("integrator.v_eps", integ.get("v_eps", 0.0), nonnegative=True),
         g_tol=_number("integrator.g_tol", integ.get("g_tol", 0.0)),
     )
-    if settings.rtol >= 1:
-        raise SceneError(f"integrator.rtol = {settings.rtol} must be < 1")
+    if not MIN_RTOL <= settings.rtol < 1:
+        raise SceneError(
+            f"integrator.rtol = {settings.rtol!r} must be in [{MIN_RTOL:g}, 1) (tighter than "
+            f"{MIN_RTOL:g} cannot be met in double precision)"
+        )
+    check_horizon(stop_time, settings.output_interval, settings.moreau_h)
     if settings.stick_rule is not None and settings.stick_rule not in STICK_RULES:
         raise SceneError(
             f"integrator.stick_rule = {settings.stick_rule!r} is not one of "
@@ -264,8 +303,82 @@ def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
         source=source,
         cosim=cosim,
     )
+    _check_initial(scene)
     _check_values(scene)
     return scene
+
+
+def check_name(name: Any) -> str:
+    """A scene name names its output directory (results/NAME): one plain file name."""
+    if not isinstance(name, str) or not name:
+        raise SceneError(f"name = {name!r} must be a non-empty string")
+    bad = next((c for c in name if c in "/\\" or ord(c) < 32 or ord(c) == 127), None)
+    if bad is not None or name.startswith(".") or len(name) > MAX_NAME_LENGTH:
+        raise SceneError(
+            f"name = {name!r} must be a plain file name (it names the output directory "
+            f"results/NAME): no '/' or '\\', not starting with '.', no control characters, at "
+            f"most {MAX_NAME_LENGTH} characters"
+        )
+    return name
+
+
+def check_horizon(
+    stop_time: float,
+    output_interval: float,
+    moreau_h: float | None = None,
+    *,
+    stop_key: str = "stop_time",
+    interval_key: str = "integrator.output_interval",
+) -> None:
+    """The limits of a run's length (module docstring): SceneError naming the key and value.
+    `stop_key` and `interval_key` name where the stop time and the output interval come from
+    (keys of the scene, or command-line options)."""
+    T, dt = stop_time, output_interval
+    if not T <= MAX_STOP_TIME:
+        raise SceneError(
+            f"{stop_key} = {T:g} s is longer than {MAX_STOP_TIME:g} s, the longest run (every "
+            "transient of the hinge decays within seconds)"
+        )
+    if dt > T:
+        raise SceneError(f"{interval_key} = {dt:g} s is longer than {stop_key} = {T:g} s")
+    if T / dt > MAX_OUTPUT_SAMPLES:
+        raise SceneError(
+            f"{interval_key} = {dt:g} s gives {T / dt:.3g} output samples over {stop_key} = "
+            f"{T:g} s; at most {MAX_OUTPUT_SAMPLES:g} (a larger {interval_key.split('.')[-1]} or "
+            "a shorter stop time)"
+        )
+    if moreau_h is None:
+        return
+    h = moreau_h
+    if h > T:
+        raise SceneError(
+            f"integrator.moreau_h = {h:g} s is longer than {stop_key} = {T:g} s (not one step)"
+        )
+    if T / h > MAX_MOREAU_STEPS:
+        raise SceneError(
+            f"integrator.moreau_h = {h:g} s gives {T / h:.3g} Moreau steps over {stop_key} = "
+            f"{T:g} s; at most {MAX_MOREAU_STEPS:g} (a larger moreau_h or a shorter stop time)"
+        )
+
+
+def _check_initial(scene: Scene) -> None:
+    theta = scene.q0[2]
+    vx, vy, omega = scene.u0
+    if not abs(theta) <= MAX_ROTATION:
+        raise SceneError(
+            f"initial.q[2] = {theta!r} rad: |theta| must be at most pi (the body's rotation from "
+            "the reference)"
+        )
+    for key, value in (("initial.u[0]", vx), ("initial.u[1]", vy)):
+        if not abs(value) <= MAX_SPEED:
+            raise SceneError(
+                f"{key} = {value!r} m/s: an initial speed must be at most {MAX_SPEED:g} m/s (the "
+                "contact laws are quasi-static: they hold for impact speeds far below this)"
+            )
+    if not abs(omega) <= MAX_ANGULAR_SPEED:
+        raise SceneError(
+            f"initial.u[2] = {omega!r} rad/s: |omega| must be at most {MAX_ANGULAR_SPEED:g} rad/s"
+        )
 
 
 def _check_values(scene: Scene) -> None:
@@ -289,6 +402,13 @@ def _check_values(scene: Scene) -> None:
             f"initial.q = {list(scene.q0)} is {depth:.6g} m deep in the bore (indentation "
             f"{depth:.6g} m > contact.max_initial_indentation = {limit:g} m)"
         )
+    radius = model.get("contact.R1")
+    if depth > MAX_INDENTATION_OVER_R1 * radius:
+        raise SceneError(
+            f"initial.q = {list(scene.q0)} is {depth:.6g} m deep in the bore: at most "
+            f"{MAX_INDENTATION_OVER_R1:g} contact.R1 = {MAX_INDENTATION_OVER_R1 * radius:g} m "
+            "(Hertz contact assumes indentations small against the radii)"
+        )
 
 
 def load_scene(scene: str | Path) -> Scene:
@@ -299,7 +419,15 @@ def load_scene(scene: str | Path) -> Scene:
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
             raise SceneError(f"{path}: no such scene file")
-        text = path.read_text(encoding="utf-8")
+        data = path.read_bytes()
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            line = data[: exc.start].count(b"\n") + 1
+            raise SceneError(
+                f"{path}: not UTF-8 text (TOML files are UTF-8): byte 0x{data[exc.start]:02x} "
+                f"at line {line}"
+            ) from None
         source = str(path)
     elif str(scene) in BUILTIN_SCENES:
         text = resources.files("csfh").joinpath("scenes", f"{scene}.toml").read_text("utf-8")

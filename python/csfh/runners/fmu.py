@@ -14,18 +14,20 @@ import math
 import shutil
 import tempfile
 import time
-from ctypes import byref, c_int, c_long, c_void_p
+from ctypes import byref, c_int, c_long, c_void_p, cast
 from functools import cache
 from typing import Any
 
 import numpy as np
 from fmpy import extract
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.model_description import ModelDescription
 
 from ..errors import SimulationError
 from ..model import model_info
-from ..model.scene import Scene
+from ..model.fmus import FmuLog
+from ..model.scene import MAX_OUTPUT_SAMPLES, Scene
 from ..paths import fmu_path
 from ..progress import Progress
 from ..trajectory import CONTACT_FIELDS, Trajectory
@@ -48,8 +50,26 @@ OUTPUT_NAMES = {  # table column -> FMU variable
 }
 
 
+CS_OUTPUT_NAMES = {  # co-simulation only: the peaks over each communication step, stresses
+    "F_N_peak": "contact.F_N_peak",
+    "F_T_peak": "contact.F_T_peak",
+    "indentation_peak": "contact.indentation_peak",
+    "stress": "flexure.stress_max",
+    "stress_peak": "flexure.stress_max_peak",
+    "pressure": "contact.pressure_max",
+    "pressure_peak": "contact.pressure_max_peak",
+    "a_frame_x": "a_frame[1]",
+    "a_frame_y": "a_frame[2]",
+}
+"""Extra columns of a co-simulation table: the peaks over the communication step that ends at
+each row (located on CVODE's interpolant; at t = 0 the values there), the flexure stress and its
+peak (tracked inside the step only with flexure.track_stress_peak), the Hertz pressure and its
+peak, and the frame's acceleration (a_base plus the shock pulse)."""
+
+
 @cache
-def _unzipped() -> str:
+def unzipped_fmu() -> str:
+    """The directory of the unzipped csfh.fmu (once per process, removed at exit)."""
     directory = tempfile.mkdtemp(prefix="csfh-fmu-")
     atexit.register(shutil.rmtree, directory, True)
     return extract(str(fmu_path()), unzipdir=directory)
@@ -59,35 +79,81 @@ def _vr(name: str) -> int:
     return model_info.variables()[name].valueReference
 
 
-def _apply_start_values(
-    fmu: FMU2Model | FMU2Slave, scene: Scene, law: str | None, extra: dict[str, Any] | None = None
-) -> None:
+def start_values(
+    scene: Scene, law: str | None, extra: dict[str, Any] | None = None
+) -> list[tuple[str, str, float | int | bool]]:
+    """Every value a run sets in initialization mode, in the order it sets them: (name, FMI type
+    as set: Real | Integer | Boolean, value). The parameters of the scene and law, the overrides,
+    the start state, the inputs. The single runs and the batch master (csfh.runners.cs_batch)
+    both take their values from here."""
     values: dict[str, Any] = dict(scene.parameter_values(law))
     if extra:
         values.update({k: model_info.coerce(k, v) for k, v in extra.items()})
     values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
     values.update(scene.inputs)
     variables = model_info.variables()
+    out: list[tuple[str, str, float | int | bool]] = []
     for name, value in values.items():
         kind = variables[name].type
         if kind == "Real":
-            fmu.setReal([_vr(name)], [float(value)])
+            out.append((name, "Real", float(value)))
         elif kind == "Boolean":
-            fmu.setBoolean([_vr(name)], [bool(value)])
+            out.append((name, "Boolean", bool(value)))
         else:
-            fmu.setInteger([_vr(name)], [int(value)])
+            out.append((name, "Integer", int(value)))
+    return out
+
+
+def _apply_start_values(
+    fmu: FMU2Model | FMU2Slave, scene: Scene, law: str | None, extra: dict[str, Any] | None = None
+) -> None:
+    for name, kind, value in start_values(scene, law, extra):
+        if kind == "Real":
+            fmu.setReal([_vr(name)], [value])
+        elif kind == "Boolean":
+            fmu.setBoolean([_vr(name)], [value])
+        else:
+            fmu.setInteger([_vr(name)], [value])
 
 
 def _instantiate(cls: type, md: ModelDescription, kind: str) -> FMU2Model | FMU2Slave:
+    """An instance whose log keeps the FMU's error messages (`_fmu_error` reports them), instead
+    of fmpy's default logger printing them on standard output."""
     interface = md.modelExchange if kind == "ME" else md.coSimulation
     fmu = cls(
         guid=md.guid,
-        unzipDirectory=_unzipped(),
+        unzipDirectory=unzipped_fmu(),
         modelIdentifier=interface.modelIdentifier,
         instanceName="csfh",
     )
-    fmu.instantiate()
+    log = FmuLog()
+    fmu.instantiate(callbacks=log.callbacks)
+    fmu._csfh_log = log  # the callbacks live as long as the instance
     return fmu
+
+
+def _fmu_error(
+    fmu: FMU2Model | FMU2Slave, law: str, t: float, exc: BaseException
+) -> SimulationError:
+    """One line for a failed FMI call: the model, the time, the call and the FMU's own reason."""
+    log: FmuLog | None = getattr(fmu, "_csfh_log", None)
+    reason = log.reason(str(exc)) if log is not None else str(exc)
+    call = getattr(exc, "function", None) or type(exc).__name__
+    return SimulationError(f"{law}: {call} failed at t = {t:.9g} s: {reason}")
+
+
+def check_rows(t_end: float, step: float, what: str) -> int:
+    """The number of output rows of a run on a grid of `step` up to `t_end`, within the limit of
+    a scene (csfh.model.scene.MAX_OUTPUT_SAMPLES); ValueError naming the values otherwise."""
+    for name, value in (("stop_time", t_end), (what, step)):
+        if not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"{name} = {value!r} must be a finite number > 0")
+    if not t_end / step <= MAX_OUTPUT_SAMPLES:
+        raise ValueError(
+            f"{what} = {step:g} s gives {t_end / step:.3g} output rows over {t_end:g} s; at most "
+            f"{MAX_OUTPUT_SAMPLES:g}"
+        )
+    return math.ceil(t_end / step - 1e-9)
 
 
 class _Table:
@@ -119,7 +185,28 @@ def _one_step_solver(fmu: FMU2Model, rtol: float, t0: float):
         def apply(self, t: float, **_: Any) -> None:
             return None
 
-    solver = CVodeSolver(
+    class _Solver(CVodeSolver):  # type: ignore[misc]
+        """fmpy's solver, whose right-hand side and root function return -1 (CVODE then stops
+        with a failure flag) instead of raising inside the ctypes callback, where the exception
+        would be printed and lost; the first exception is kept in `callback_error`."""
+
+        callback_error: BaseException | None = None
+
+        def f(self, t: float, y: Any, ydot: Any, user_data: Any) -> int:
+            try:
+                return int(super().f(t, y, ydot, user_data))
+            except Exception as exc:  # reported by the caller
+                self.callback_error = self.callback_error or exc
+                return -1
+
+        def g(self, t: float, y: Any, gout: Any, user_data: Any) -> int:
+            try:
+                return int(super().g(t, y, gout, user_data))
+            except Exception as exc:  # reported by the caller
+                self.callback_error = self.callback_error or exc
+                return -1
+
+    solver = _Solver(
         nx=6,
         nz=1,
         get_x=fmu.getContinuousStates,
@@ -133,6 +220,16 @@ def _one_step_solver(fmu: FMU2Model, rtol: float, t0: float):
         relativeTolerance=rtol,
         maxNumSteps=100000,
     )
+    # only fmpy's handler, which keeps CVODE's message for the error we raise: SUNDIALS's default
+    # handler would also print it on standard error
+    clear, push = (
+        sundials_cvode.SUNContext_ClearErrHandlers,
+        sundials_cvode.SUNContext_PushErrHandler,
+    )
+    clear.argtypes, clear.restype = [c_void_p], c_int
+    push.argtypes, push.restype = [c_void_p, c_void_p, c_void_p], c_int
+    if clear(solver.sunctx) != 0 or push(solver.sunctx, cast(solver.ehfun_, c_void_p), None) != 0:
+        raise SimulationError("CVODE: cannot install the error handler")
     api = {}
     for name, args in {
         "CVodeSetStopTime": [c_void_p, sunrealtype],
@@ -160,12 +257,16 @@ def _evaluations(fmu: FMU2Model | FMU2Slave) -> dict[str, int]:
     return dict(zip(parts, (int(v) for v in values), strict=True))
 
 
-def _event_iteration(fmu: FMU2Model) -> None:
+def _event_iteration(fmu: FMU2Model) -> float:
+    """The event iteration; returns the next time event the FMU reports (inf: none)."""
     more = True
+    next_event = math.inf
     while more:
-        more, terminate, *_ = fmu.newDiscreteStates()
+        more, terminate, _, _, defined, next_time = fmu.newDiscreteStates()
         if terminate:
             raise SimulationError("the FMU requested termination")
+        next_event = float(next_time) if defined else math.inf
+    return next_event
 
 
 def simulate_me(
@@ -192,6 +293,7 @@ def simulate_me(
     from fmpy.sundials.cvode import CV_ROOT_RETURN, CVode
 
     CV_ONE_STEP = 2  # cvode.h (fmpy's binding leaves it commented out)
+    CV_TSTOP_RETURN = 1  # cvode.h
 
     rtol = scene.integrator.rtol if rtol is None else rtol
     dt_out = scene.integrator.output_interval if output_interval is None else output_interval
@@ -207,12 +309,13 @@ def simulate_me(
 
     wall = time.perf_counter()
     fmu = _instantiate(FMU2Model, md, "ME")
+    t = 0.0
     try:
         fmu.setupExperiment(tolerance=rtol, startTime=0.0, stopTime=t_end)
         fmu.enterInitializationMode()
         _apply_start_values(fmu, scene, law, parameters)
         fmu.exitInitializationMode()
-        _event_iteration(fmu)
+        t_event = _event_iteration(fmu)  # time events: the ends of a shock pulse
         fmu.enterContinuousTimeMode()
 
         table = _Table(_TABLE_COLUMNS)
@@ -275,9 +378,10 @@ def simulate_me(
                     peak = max(peak, interpolated(0.5 * (lo + hi), peak_vrs)[j])
                 rec[col] = max(rec[col], peak)
 
-        api["CVodeSetStopTime"](solver.cvode_mem, t_end)
+        api["CVodeSetStopTime"](solver.cvode_mem, min(t_end, t_event))
         t = 0.0
         if output_times is None:
+            check_rows(t_end, dt_out, "output_interval")
             grid = np.arange(1, math.floor(t_end / dt_out * (1 + 1e-12)) + 1) * dt_out
         else:
             grid = np.asarray(output_times, dtype=float)
@@ -290,6 +394,8 @@ def simulate_me(
         nst = c_long(0)
         while t < t_end * (1 - 1e-15):
             flag = CVode(solver.cvode_mem, t_end, solver.x, byref(tret), CV_ONE_STEP)
+            if solver.callback_error is not None:
+                raise _fmu_error(fmu, law, t, solver.callback_error)
             if flag < 0:
                 info = solver.error_info or ("?", "?", "?", "no message")
                 raise SimulationError(
@@ -320,7 +426,7 @@ def simulate_me(
                 n_events += 1
                 table.add(row)  # the event instant itself (left limit)
                 fmu.enterEventMode()
-                _event_iteration(fmu)
+                t_event = _event_iteration(fmu)
                 fmu.enterContinuousTimeMode()
                 count = fmu.getInteger([count_vr])[0]
                 if count > n_contacts:
@@ -337,7 +443,16 @@ def simulate_me(
                         records[-1][3] = -fmu.getReal([rate_vr])[0]
                 n_steps_total += nst.value  # CVodeReInit restarts the count
                 solver.reset(t)
-                api["CVodeSetStopTime"](solver.cvode_mem, t_end)
+                api["CVodeSetStopTime"](solver.cvode_mem, min(t_end, t_event))
+            elif flag == CV_TSTOP_RETURN and t < t_end * (1 - 1e-15):
+                # a time event (the start or end of a shock pulse, where the right-hand side has
+                # a kink): CVODE stopped exactly there; restart it
+                fmu.enterEventMode()
+                t_event = _event_iteration(fmu)
+                fmu.enterContinuousTimeMode()
+                n_steps_total += nst.value
+                solver.reset(t)
+                api["CVodeSetStopTime"](solver.cvode_mem, min(t_end, t_event))
             if progress is not None:
                 progress.update(t / t_end)
         api["CVodeGetNumSteps"](solver.cvode_mem, byref(nst))
@@ -345,6 +460,8 @@ def simulate_me(
         rhs = fmu.getInteger([rhs_vr])[0]
         evaluations = _evaluations(fmu)
         fmu.terminate()
+    except FMICallException as exc:
+        raise _fmu_error(fmu, law, t, exc) from None
     finally:
         fmu.freeInstance()
     tr = Trajectory(
@@ -394,19 +511,20 @@ def simulate_cs(
     h = scene.integrator.output_interval if communication_step is None else communication_step
     t_end = scene.stop_time if stop_time is None else stop_time
     md = model_info.model_description()
-    out_vrs = [_vr(n) for n in OUTPUT_NAMES.values()]
+    out_vrs = [_vr(n) for n in (*OUTPUT_NAMES.values(), *CS_OUTPUT_NAMES.values())]
     count_vr = _vr("contact.count")
     active_vr = _vr("contact.active")
     wall = time.perf_counter()
     fmu = _instantiate(FMU2Slave, md, "CS")
+    t = 0.0
     try:
         fmu.setupExperiment(tolerance=rtol, startTime=0.0, stopTime=t_end)
         fmu.enterInitializationMode()
         _apply_start_values(fmu, scene, law, parameters)
         fmu.exitInitializationMode()
-        table = _Table(_TABLE_COLUMNS)
+        table = _Table((*_TABLE_COLUMNS, *CS_OUTPUT_NAMES))
         table.add([0.0, *fmu.getReal(out_vrs)])
-        n = math.ceil(t_end / h - 1e-9)
+        n = check_rows(t_end, h, "communication_step")
         event_vrs = [
             _vr(n)
             for n in (
@@ -454,7 +572,10 @@ def simulate_cs(
             [_vr("diagnostics.integrator_steps"), _vr("diagnostics.rhs_evaluations")]
         )
         evaluations = _evaluations(fmu)
+        final_count = count
         fmu.terminate()
+    except FMICallException as exc:
+        raise _fmu_error(fmu, law, t, exc) from None
     finally:
         fmu.freeInstance()
     cr = _contact_arrays(records)
@@ -472,6 +593,7 @@ def simulate_cs(
         "steps": int(steps),
         "rhs_evaluations": int(rhs),
         "evaluations": evaluations,
+        "contact_count": int(final_count),
         "wall_time": time.perf_counter() - wall,
         "do_step_time": do_step_time,
     }

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..model.core import library
 from ..model.instance import core_model
-from ..model.scene import Scene, load_scene
+from ..model.scene import MAX_MOREAU_STEPS, MAX_OUTPUT_SAMPLES, Scene, load_scene
 from ..trajectory import Trajectory
 
 STICK_RULES = {"paper": 1, "memory": 2}
@@ -65,6 +65,31 @@ _STATS = (
 )
 
 
+def step_counts(t_end: float, h: float, dt_out: float) -> tuple[int, int, int]:
+    """(steps, steps per output row, rows to allocate) of a Moreau run, within the limits of a
+    scene (csfh.model.scene: at least one step, at most MAX_MOREAU_STEPS steps and
+    MAX_OUTPUT_SAMPLES rows); ValueError naming the values otherwise."""
+    for name, value in (("stop_time", t_end), ("h", h), ("output_interval", dt_out)):
+        if not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"Moreau: {name} = {value!r} must be a finite number > 0")
+    if not t_end / h <= MAX_MOREAU_STEPS:
+        raise ValueError(
+            f"Moreau: h = {h:g} s gives {t_end / h:.3g} steps over {t_end:g} s; at most "
+            f"{MAX_MOREAU_STEPS:g}"
+        )
+    n_steps = round(t_end / h)
+    if n_steps < 1:
+        raise ValueError(f"Moreau: h = {h:g} s is longer than the run ({t_end:g} s)")
+    record_every = max(1, round(dt_out / h))
+    max_records = n_steps // record_every + 2
+    if max_records > MAX_OUTPUT_SAMPLES + 2:
+        raise ValueError(
+            f"Moreau: output_interval = {dt_out:g} s gives {max_records - 2} rows; at most "
+            f"{MAX_OUTPUT_SAMPLES:g}"
+        )
+    return n_steps, record_every, max_records
+
+
 def moreau(
     scene: Scene | str | Path,
     *,
@@ -92,12 +117,10 @@ def moreau(
         raise ValueError(f"h = {h!r} must be a positive step")
     t_end = scene.stop_time if stop_time is None else stop_time
     dt_out = scene.integrator.output_interval if output_interval is None else output_interval
-    n_steps = round(t_end / h)
-    record_every = max(1, round(dt_out / h))
+    n_steps, record_every, max_records = step_counts(t_end, h, dt_out)
     lib = library()
     ncols, icols = lib.csfh_api_moreau_record_columns(), lib.csfh_api_moreau_impact_columns()
     assert ncols == len(_RECORD) and icols == len(_IMPACT), "core library and harness disagree"
-    max_records = n_steps // record_every + 2
     records = np.zeros((max_records, ncols))
     impacts = np.zeros((max_impacts, icols))
     x_end = np.zeros(6)

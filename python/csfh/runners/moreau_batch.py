@@ -22,7 +22,7 @@ from ..model.core import CoreModel, library
 from ..model.instance import core_model
 from ..model.scene import Scene
 from ..trajectory import Trajectory
-from .moreau import _IMPACT, _RECORD, _STATS, STICK_RULES, trajectory_from_buffers
+from .moreau import _IMPACT, _RECORD, _STATS, STICK_RULES, step_counts, trajectory_from_buffers
 
 _dp = POINTER(c_double)
 
@@ -124,10 +124,8 @@ def moreau_batch(
         raise ValueError(f"h = {h!r} must be a positive step")
     t_end = scene.stop_time if stop_time is None else stop_time
     dt_out = scene.integrator.output_interval if output_interval is None else output_interval
-    n_steps = round(t_end / h)
-    record_every = max(1, round(dt_out / h))
+    n_steps, record_every, max_records = step_counts(t_end, h, dt_out)
     n = len(parameter_sets)
-    max_records = n_steps // record_every + 2
     models: list[CoreModel] = [core_model(scene, p) for p in parameter_sets]
     handles = (c_void_p * max(n, 1))(*[m.handle for m in models])
     x0 = np.ascontiguousarray(np.tile(np.array(scene.x0, dtype=float), (n, 1)))

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from ..errors import SimulationError
 from ..model import model_info
 from ..model.scene import Scene, load_scene
 from ..progress import Progress
@@ -57,5 +58,14 @@ def simulate(
         if interface == "cs":
             return simulate_cs(scene, model, progress=progress, **options)
         return simulate_me(scene, model, progress=progress, **options)
+    except (SimulationError, FloatingPointError) as exc:
+        raise with_source(exc, scene) from None
     finally:
         progress.close()
+
+
+def with_source(exc: Exception, scene: Scene) -> Exception:
+    """The same error, its message prefixed with the scene's file (or name), so that a failed
+    run says which scene failed."""
+    where = scene.source if scene.source and scene.source != "<dict>" else f"scene {scene.name}"
+    return type(exc)(f"{where}: {exc}")

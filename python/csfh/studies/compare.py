@@ -4,7 +4,8 @@ summary and the figures; and read such an output directory back (`csfh plot DIR`
 Files in the output directory: MODEL.csv (the output table of each model), MODEL.steps.csv (the
 per-step records of the event-driven models, for the figures against the step number),
 summary.json (the scene, each model's summary and contact onsets, the clearance) and the figures
-of csfh.studies.paper_figures."""
+of csfh.studies.paper_figures. They are one output set (csfh.output): a comparison replaces the
+previous one's files as a whole."""
 
 from __future__ import annotations
 
@@ -17,12 +18,16 @@ import numpy as np
 
 from ..model.instance import clearance
 from ..model.scene import Scene, load_scene
-from ..output import read_table, write_json, write_table
+from ..output import check_set, output_set, read_table, write_json, write_table
 from ..runners.simulate import simulate
 from ..trajectory import UNITS, Trajectory
 from .paper_figures import write_figures
 
 SUMMARY = "summary.json"
+OUTPUT_SET = "compare"
+"""The name of a comparison's output set (csfh.output): its files replace the previous
+comparison's in the same directory as a whole; `csfh plot` checks that they still belong
+together."""
 
 
 @dataclass
@@ -50,14 +55,8 @@ def compare(
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     models = models or scene.models
     runs = [simulate(scene, m, interface=interface, quiet=quiet) for m in models]
-    files: list[Path] = []
-    for tr in runs:
-        files.append(tr.write_csv(out / f"{tr.model}.csv"))
-        if tr.steps:
-            files.append(write_table(out / f"{tr.model}.steps.csv", tr.steps, UNITS))
     delta = clearance(scene)
     summary = {
         "scene": scene.name,
@@ -77,8 +76,14 @@ def compare(
             "per step",
         },
     }
-    files.append(write_json(out / SUMMARY, summary))
-    files += write_figures(runs, out, title(scene.name, scene.description), delta)
+    files: list[Path] = []
+    with output_set(out, OUTPUT_SET):  # replaces the previous comparison's files as a whole
+        for tr in runs:
+            files.append(tr.write_csv(out / f"{tr.model}.csv"))
+            if tr.steps:
+                files.append(write_table(out / f"{tr.model}.steps.csv", tr.steps, UNITS))
+        files.append(write_json(out / SUMMARY, summary))
+        files += write_figures(runs, out, title(scene.name, scene.description), delta)
     return Comparison(scene=scene, runs=runs, files=files)
 
 
@@ -93,6 +98,7 @@ def read_comparison(out: Path) -> tuple[dict[str, Any], list[Trajectory]]:
     the file that is missing or unreadable."""
     out = Path(out)
     path = out / SUMMARY
+    check_set(out, OUTPUT_SET, [SUMMARY], "csfh compare")  # and completes an interrupted commit
     if not path.is_file():
         raise ValueError(
             f"{out}: no {SUMMARY} here; csfh plot reads the output directory of csfh compare"
@@ -104,6 +110,8 @@ def read_comparison(out: Path) -> tuple[dict[str, Any], list[Trajectory]]:
         float(summary["clearance"])
     except (ValueError, KeyError, TypeError) as exc:
         raise ValueError(f"{path}: not a summary written by csfh compare ({exc})") from None
+    names = [*(f"{m}.csv" for m in models), *(f"{m}.steps.csv" for m in models)]
+    check_set(out, OUTPUT_SET, names, "csfh compare")
     runs = []
     for model in models:
         table = out / f"{model}.csv"
@@ -119,7 +127,9 @@ def read_comparison(out: Path) -> tuple[dict[str, Any], list[Trajectory]]:
 
 
 def replot(out: Path) -> list[Path]:
-    """Draw the figures of a comparison again from its output directory."""
-    summary, runs = read_comparison(out)
-    name = title(summary["scene"], summary.get("description", ""))
-    return write_figures(runs, Path(out), name, float(summary["clearance"]))
+    """Draw the figures of a comparison again from its output directory (they replace the
+    comparison's figures; its tables stay)."""
+    with output_set(out, OUTPUT_SET, merge=True):
+        summary, runs = read_comparison(out)
+        name = title(summary["scene"], summary.get("description", ""))
+        return write_figures(runs, Path(out), name, float(summary["clearance"]))

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ...output import write_json, write_text
+from ...output import output_set, write_json, write_text
 from .figures import work_precision
 from .metrics import METRICS, RESOLUTION, Point, Study, grouped, observed_order, plotted
 
@@ -125,8 +125,13 @@ def conclusions(study: Study, groups: dict[tuple[str, str, str], list[Point]]) -
 
 
 def write_report(study: Study, out: Path) -> list[Path]:
-    """report.md, accuracy.json and work-precision figures in `out`."""
-    out.mkdir(parents=True, exist_ok=True)
+    """report.md, accuracy.json and work-precision figures in `out` (one output set: they
+    replace the previous report's files as a whole)."""
+    with output_set(out, "accuracy"):
+        return _write_report(study, out)
+
+
+def _write_report(study: Study, out: Path) -> list[Path]:
     files = work_precision(study, out)
     data = {
         "scene": study.scene,

@@ -6,15 +6,20 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from ...output import write_json, write_text
+from ...output import output_set, write_json, write_text
 from . import suite
 from .cases import Case
 from .suite import Run
 
 
 def write_report(cases: Sequence[Case], runs: Sequence[Run], out: Path) -> Path:
-    """stress.json and stress.md in `out`; returns the path of stress.md."""
-    out.mkdir(parents=True, exist_ok=True)
+    """stress.json and stress.md in `out` (one output set: they replace the previous report's
+    files as a whole); returns the path of stress.md."""
+    with output_set(out, "stress"):
+        return _write_report(cases, runs, out)
+
+
+def _write_report(cases: Sequence[Case], runs: Sequence[Run], out: Path) -> Path:
     write_json(
         out / "stress.json",
         {

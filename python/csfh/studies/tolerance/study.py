@@ -113,6 +113,36 @@ def _int_option(where: str, value: Any, minimum: int) -> int:
     return value
 
 
+def _parse_tolerances(tol: Any) -> dict[str, Distribution]:
+    if not isinstance(tol, dict) or not tol:
+        raise ToleranceError("[tolerance] must be a non-empty table")
+    real = {
+        n
+        for n, v in model_info.variables().items()
+        if v.causality == "parameter" and v.type == "Real"
+    }
+    tolerances = {}
+    for key in sorted(tol):
+        if key not in real:
+            raise ToleranceError(f"tolerance: {key!r} is not a real FMU parameter")
+        tolerances[key] = _parse_distribution(key, tol[key])
+    return tolerances
+
+
+def _parse_montecarlo(mc: Any) -> tuple[int, int]:
+    """runs and seed of a [montecarlo] table (its models are checked by the caller)."""
+    if not isinstance(mc, dict):
+        raise ToleranceError("[montecarlo] must be a table")
+    unknown = sorted(set(mc) - {"runs", "seed", "models"})
+    if unknown:
+        raise ToleranceError(
+            f"[montecarlo]: unknown key {unknown[0]!r} (allowed: models, runs, seed)"
+        )
+    runs = _int_option("montecarlo.runs", mc.get("runs", 200), 1)
+    seed = _int_option("montecarlo.seed", mc.get("seed", 1), 0)
+    return runs, seed
+
+
 def study_from_dict(data: dict[str, Any], source: str) -> ToleranceStudy:
     data = dict(data)
     tol = data.pop("tolerance", None)
@@ -125,27 +155,8 @@ def study_from_dict(data: dict[str, Any], source: str) -> ToleranceStudy:
         if tol is None:
             tol = _default_tolerances()
             source = f"{source} (no [tolerance] table: the defaults of {DEFAULT_FILE})"
-        if not isinstance(tol, dict) or not tol:
-            raise ToleranceError("[tolerance] must be a non-empty table")
-        real = {
-            n
-            for n, v in model_info.variables().items()
-            if v.causality == "parameter" and v.type == "Real"
-        }
-        tolerances = {}
-        for key in sorted(tol):
-            if key not in real:
-                raise ToleranceError(f"tolerance: {key!r} is not a real FMU parameter")
-            tolerances[key] = _parse_distribution(key, tol[key])
-        if not isinstance(mc, dict):
-            raise ToleranceError("[montecarlo] must be a table")
-        unknown = sorted(set(mc) - {"runs", "seed", "models"})
-        if unknown:
-            raise ToleranceError(
-                f"[montecarlo]: unknown key {unknown[0]!r} (allowed: models, runs, seed)"
-            )
-        runs = _int_option("montecarlo.runs", mc.get("runs", 200), 1)
-        seed = _int_option("montecarlo.seed", mc.get("seed", 1), 0)
+        tolerances = _parse_tolerances(tol)
+        runs, seed = _parse_montecarlo(mc)
         models = mc.get("models", list(model_info.PAPER_MODELS))
         if not isinstance(models, list) or not models:
             raise ToleranceError("montecarlo.models must be a non-empty list")
@@ -176,9 +187,8 @@ def _default_tolerances() -> dict[str, Any]:
     return dict(tomllib.loads(text)["tolerance"])
 
 
-def load_study(arg: str | Path) -> ToleranceStudy:
-    """A tolerance file by path, or a built-in scene by name (tolerance_csfh, or any built-in
-    scene, which then gets the default tolerances of tolerance_csfh)."""
+def _read(arg: str | Path) -> tuple[dict[str, Any], str]:
+    """The TOML of a tolerance file by path, or of a built-in scene by name, and its source."""
     path = Path(arg)
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
@@ -193,10 +203,39 @@ def load_study(arg: str | Path) -> ToleranceStudy:
             )
         text, source = builtin, f"{arg} (built-in)"
     try:
-        data = tomllib.loads(text)
+        return tomllib.loads(text), source
     except tomllib.TOMLDecodeError as exc:
         raise ToleranceError(f"{source}: not valid TOML: {exc}") from None
+
+
+def load_study(arg: str | Path) -> ToleranceStudy:
+    """A tolerance file by path, or a built-in scene by name (tolerance_csfh, or any built-in
+    scene, which then gets the default tolerances of tolerance_csfh)."""
+    data, source = _read(arg)
     return study_from_dict(data, source)
+
+
+def study_for_scene(scene: Scene, arg: str | Path) -> ToleranceStudy:
+    """The [tolerance] and [montecarlo] tables (runs, seed) of a tolerance file (path, or a
+    built-in name such as tolerance_csfh), applied to `scene`: the file's own scene keys, if it
+    has any, are not used. The distributions' nominal values are `scene`'s."""
+    data, source = _read(arg)
+    try:
+        if "tolerance" not in data:
+            raise ToleranceError("no [tolerance] table")
+        tolerances = _parse_tolerances(data["tolerance"])
+        runs, seed = _parse_montecarlo(data.get("montecarlo", {}))
+    except ToleranceError as exc:
+        raise ToleranceError(f"{source}: {exc}") from None
+    return ToleranceStudy(
+        scene=scene,
+        tolerances=tolerances,
+        runs=runs,
+        seed=seed,
+        models=(),
+        source=source,
+        nominal=nominal_values(scene, list(tolerances)),
+    )
 
 
 def sample(study: ToleranceStudy, k: int) -> dict[str, float]:

@@ -1,0 +1,179 @@
+"""The result store of sweeps and tolerance studies (csfh.batch.store): one bad record (a missing,
+damaged or misplaced signals file, a damaged or torn line) is skipped and reported, every other
+record is kept, its run alone is computed again, and the skipped lines are set aside byte for
+byte, never lost."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from csfh.batch.executors import run_tasks
+from csfh.batch.store import ResultStore
+from csfh.batch.tasks import Task
+from csfh.cli.main import main
+from csfh.model.scene import load_scene
+
+N = 12
+
+
+@pytest.fixture(scope="module")
+def tasks() -> list[Task]:
+    """Twelve short Moreau runs with signals (cheap: one batch in the C core)."""
+    scene = load_scene("central")
+    return [
+        Task(
+            scene=scene,
+            model="Moreau",
+            parameters=(("body1.m", 9.0 + 0.1 * k),),
+            stop_time=0.05,
+            output_interval=1e-3,
+        )
+        for k in range(N)
+    ]
+
+
+@pytest.fixture(scope="module")
+def full(tasks: list[Task], tmp_path_factory: pytest.TempPathFactory) -> dict[str, bytes]:
+    """A complete store, as files."""
+    out = tmp_path_factory.mktemp("store")
+    report = run_tasks(tasks, ResultStore(out), workers=1, quiet=True, batch=1)
+    assert report.computed == N
+    return {p.relative_to(out).as_posix(): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+
+
+def restore(full: dict[str, bytes], out: Path) -> Path:
+    for rel, data in full.items():
+        (out / rel).parent.mkdir(parents=True, exist_ok=True)
+        (out / rel).write_bytes(data)
+    return out
+
+
+def index_lines(out: Path) -> list[bytes]:
+    return (out / "tasks.jsonl").read_bytes().splitlines(keepends=True)
+
+
+def key_of(line: bytes) -> str:
+    return str(json.loads(line)["key"])
+
+
+def check_kept_all_but(store: ResultStore, tasks: list[Task], lost: set[str]) -> None:
+    """Every record but `lost` is there with its summary and readable signals."""
+    assert set(store.records) == {t.key for t in tasks} - lost
+    for key in store.records:
+        sig = store.signals(key)
+        assert set(sig) == {"x", "y", "theta", "F_N", "F_T"} and len(sig["y"]) == 51
+
+
+def recompute(tasks: list[Task], out: Path, expected: int) -> None:
+    report = run_tasks(tasks, ResultStore(out), workers=1, quiet=True)
+    assert (report.computed, report.reused) == (expected, N - expected)
+    again = ResultStore(out)
+    assert again.problems == [] and len(again) == N
+
+
+def test_a_missing_signals_file_costs_one_run_only(
+    tasks: list[Task], full: dict[str, bytes], tmp_path: Path
+) -> None:
+    out = restore(full, tmp_path)
+    lines = index_lines(out)
+    victim = key_of(lines[2])
+    (out / "signals" / f"{victim}.npz").unlink()
+    store = ResultStore(out)
+    check_kept_all_but(store, tasks, {victim})
+    assert len(store.problems) == 1
+    assert "line 3" in store.problems[0] and f"signals/{victim}.npz is missing" in store.problems[0]
+    # set aside byte for byte; the index holds every other line, in order
+    assert (out / "tasks.rejected.jsonl").read_bytes() == lines[2]
+    assert index_lines(out) == lines[:2] + lines[3:]
+    recompute(tasks, out, 1)
+
+
+@pytest.mark.parametrize(
+    ("damage", "why"),
+    [
+        (lambda line: b"}{ not json\n", "not JSON"),
+        (lambda line: line[: len(line) // 2] + b"\n", "not JSON"),
+        (lambda line: b"[1, 2, 3]\n", "not a record"),
+        (lambda line: b'{"summary": {}}\n', "no key"),
+        (lambda line: line.replace(b'"signals/', b'"../../signals/'), "is not this store's"),
+    ],
+    ids=["garbage", "cut", "list", "no-key", "path-outside"],
+)
+def test_a_damaged_line_costs_one_run_only(
+    tasks: list[Task], full: dict[str, bytes], tmp_path: Path, damage: object, why: str
+) -> None:
+    out = restore(full, tmp_path)
+    lines = index_lines(out)
+    bad = damage(lines[4])  # type: ignore[operator]
+    (out / "tasks.jsonl").write_bytes(b"".join([*lines[:4], bad, *lines[5:]]))
+    store = ResultStore(out)
+    check_kept_all_but(store, tasks, {key_of(lines[4])})
+    assert len(store.problems) == 1 and "line 5" in store.problems[0] and why in store.problems[0]
+    assert (out / "tasks.rejected.jsonl").read_bytes() == bad
+    recompute(tasks, out, 1)
+
+
+def test_a_damaged_signals_file_is_found_by_its_hash(
+    tasks: list[Task], full: dict[str, bytes], tmp_path: Path
+) -> None:
+    out = restore(full, tmp_path)
+    lines = index_lines(out)
+    victims = [key_of(lines[1]), key_of(lines[7])]
+    path = out / "signals" / f"{victims[0]}.npz"
+    path.write_bytes(path.read_bytes()[:-10])  # cut short
+    data = bytearray((out / "signals" / f"{victims[1]}.npz").read_bytes())
+    data[len(data) // 2] ^= 0xFF  # one flipped byte inside
+    (out / "signals" / f"{victims[1]}.npz").write_bytes(bytes(data))
+    store = ResultStore(out)
+    check_kept_all_but(store, tasks, set(victims))
+    assert len(store.problems) == 2 and all("damaged" in p for p in store.problems)
+    recompute(tasks, out, 2)
+
+
+def test_a_torn_last_line_and_a_later_append_stay_apart(
+    tasks: list[Task], full: dict[str, bytes], tmp_path: Path
+) -> None:
+    out = restore(full, tmp_path)
+    lines = index_lines(out)
+    victim = key_of(lines[-1])
+    (out / "tasks.jsonl").write_bytes(b"".join(lines[:-1]) + lines[-1][:40])
+    store = ResultStore(out)
+    check_kept_all_but(store, tasks, {victim})
+    assert "incomplete (an interrupted write)" in store.problems[0]
+    recompute(tasks, out, 1)
+    # another writer's torn line after this store was opened: an append starts its own line
+    store = ResultStore(out)
+    with open(out / "tasks.jsonl", "ab") as fh:
+        fh.write(b'{"key": "torn')
+    task = Task(scene=tasks[0].scene, model="Moreau", stop_time=0.05, output_interval=1e-3)
+    store.add(task, {"first_contact": None}, {"y": np.zeros(3)})
+    last = index_lines(out)[-2:]
+    assert last[0] == b'{"key": "torn\n' and key_of(last[1]) == task.key
+    assert task.key in ResultStore(out)
+
+
+def test_the_sweep_command_reports_the_skipped_records_and_recomputes_only_them(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The case of the issue: a sweep that lost one signals file and has one damaged line kept
+    2 of its records and computed the others again; now it computes exactly those two."""
+    args = ["sweep", "central", "--models", "Moreau", "LN_cylinders", "--params", "R1", "m1"]
+    args += ["--stop-time", "0.1", "--quiet", "--workers", "1", "--out", str(tmp_path)]
+    assert main(args) == 0
+    first = capsys.readouterr().out
+    total = int(first.split("sweep: ")[1].split(" runs")[0])
+    lines = index_lines(tmp_path)
+    assert len(lines) == total >= 8
+    (tmp_path / "signals" / f"{key_of(lines[1])}.npz").unlink()
+    (tmp_path / "tasks.jsonl").write_bytes(b"".join([*lines[:3], b"#%!\n", *lines[4:]]))
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    warnings = captured.err.strip().splitlines()
+    assert len(warnings) == 2 and all(w.startswith("csfh: warning: ") for w in warnings)
+    assert "line 2" in warnings[0] and "missing" in warnings[0]
+    assert "line 4" in warnings[1] and "not JSON" in warnings[1]
+    assert f"sweep: {total} runs (2 computed, {total - 2} reused" in captured.out
