@@ -22,6 +22,7 @@ CSFH_SOURCES = {
     "fmi2_glue.c",
     "fmu_instance.c",
     "cosimulation.c",
+    "rk45.c",
     "csfh_fmu_model.c",
     "csfh_flexure.c",
     "csfh_contact.c",
