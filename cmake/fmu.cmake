@@ -9,6 +9,10 @@
 #       the FMU's shared library for this platform, exporting only the fmi2* (FMI 3.0: fmi3*)
 #       functions, into ${CMAKE_BINARY_DIR}/binaries/<id>/<platform>/ (FMI 3.0:
 #       ${CMAKE_BINARY_DIR}/binaries3/<id>/<platform tuple>/)
+#   csfh_add_fmu_objects(TARGET SOURCES ... [INCLUDE_DIRS ...] [LINK ...])
+#       the FMI-independent part of an FMU (model, instance, stepper) compiled once, as an object
+#       library that the FMI 2.0 and FMI 3.0 binaries both link (LINK TARGET), each with its own
+#       front-end (fmi2_glue.c, fmi3_glue.c)
 #   csfh_add_test_importer(TARGET SOURCES ... [LINK ...])
 #       a C importer (an executable that loads FMU binaries, portable between POSIX and Windows):
 #       built by the host build and by every cross build, so the same importer runs the FMU of
@@ -93,6 +97,14 @@ function(csfh_add_fmu_binary target)
       target_link_options(${target} PRIVATE -Wl,--exclude-libs,ALL)  # script suffices)
     endif()
   endif()
+endfunction()
+
+function(csfh_add_fmu_objects target)
+  cmake_parse_arguments(ARG "" "" "SOURCES;INCLUDE_DIRS;LINK" ${ARGN})
+  add_library(${target} OBJECT ${ARG_SOURCES})
+  target_include_directories(${target} PRIVATE ${ARG_INCLUDE_DIRS})
+  target_compile_options(${target} PRIVATE ${CSFH_WARNINGS})
+  target_link_libraries(${target} PRIVATE ${ARG_LINK})
 endfunction()
 
 function(csfh_add_test_importer target)
