@@ -4,11 +4,14 @@ fmi3DoStep at a contact event, and bad input refused with a message naming the v
 
 from __future__ import annotations
 
+import glob
 import math
+import os
 import re
 import shutil
 import struct
 import subprocess
+import zipfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -119,6 +122,80 @@ def test_fmi3_binary_exports_exactly_the_fmi3_functions(name: str, tmp_path: Pat
     expected = fmi3_functions()
     assert len(expected) > 60
     assert symbols == expected
+
+
+def need(condition: bool, reason: str) -> None:
+    """Skip when `condition` is false (a host-only build), but fail in CI (every platform)."""
+    if not condition:
+        if os.environ.get("CI"):
+            pytest.fail(f"{reason} (CI must build and check every platform)")
+        pytest.skip(reason)
+
+
+def tool(*names: str) -> str:
+    for name in names:
+        found = shutil.which(name) or next(
+            iter(sorted(glob.glob(f"/usr/bin/{name}-[0-9]*"), reverse=True)), None
+        )
+        if found:
+            return found
+    need(False, f"none of {names} is installed")
+    return ""
+
+
+PLATFORMS = {
+    "x86_64-linux": ".so",
+    "x86_64-windows": ".dll",
+    "x86_64-darwin": ".dylib",
+    "aarch64-darwin": ".dylib",
+}
+
+
+@pytest.mark.parametrize("name", ["csfh", "combdrive"])
+def test_fmi3_binaries_of_the_other_platforms_export_exactly_the_fmi3_functions(
+    name: str, tmp_path: Path
+) -> None:
+    """The cross builds (cmake/platforms.cmake) give the FMI 3.0 FMUs a binary per FMI 3.0
+    platform tuple; each exports exactly the fmi3* functions (win64: its export table; darwin:
+    the Mach-O's global symbols), and the linux one needs glibc 2.17 at most."""
+    names = set(zipfile.ZipFile(fmu3_of(name)).namelist())
+    need(
+        f"binaries/x86_64-windows/{name}.dll" in names,
+        f"fmi3/{name}.fmu has no x86_64-windows binary (host-only build?)",
+    )
+    assert {f"binaries/{p}/{name}{suffix}" for p, suffix in PLATFORMS.items()} <= names
+    directory = Path(extract(str(fmu3_of(name)), unzipdir=str(tmp_path)))
+    expected = fmi3_functions()
+    text = subprocess.run(
+        [tool("objdump"), "-p", str(directory / "binaries/x86_64-windows" / f"{name}.dll")],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    table = text.split("[Ordinal/Name Pointer] Table", 1)[1].split("\n\n", 1)[0]
+    assert set(re.findall(r"\]\s+(\S+)", table)) == expected
+    for platform in ("x86_64-darwin", "aarch64-darwin"):
+        text = subprocess.run(
+            [
+                tool("llvm-nm"),
+                "-g",
+                "--defined-only",
+                str(directory / "binaries" / platform / f"{name}.dylib"),
+            ],
+            check=True,
+            capture_output=True,
+            text=True,
+        ).stdout
+        symbols = {line.split()[-1] for line in text.splitlines() if line.strip()}
+        assert symbols - {"__mh_dylib_header", "___dso_handle"} == {"_" + f for f in expected}
+    text = subprocess.run(
+        [tool("objdump"), "-T", str(directory / "binaries/x86_64-linux" / f"{name}.so")],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    versions = {tuple(int(p) for p in v.split(".")) for v in re.findall(r"GLIBC_([0-9.]+)", text)}
+    assert versions and max(versions) <= (2, 17), sorted(versions)
 
 
 def test_fmu_path_refuses_unknown_fmi_version() -> None:
