@@ -1,6 +1,6 @@
-"""Co-simulation (CVODE inside the FMU, fmi2DoStep) against model exchange (fmpy's CVode driving
-the same FMU through Python callbacks) on 1 s of the `csfh` scene: same FMU, same contact law
-(LN_spheres), same relative tolerance, same output grid; every ratio is measured in one run
+"""Co-simulation (the integrator inside the FMU, fmi2DoStep) against model exchange (fmpy's CVode
+driving the same FMU through Python callbacks) on 1 s of the `csfh` scene: same FMU, same contact
+law (LN_spheres), same relative tolerance, same output grid; every ratio is measured in one run
 (medians of repeats, the variants interleaved). Target: CS >= 10x faster.
 
 A. Complete runs with the harness drivers (instantiate, set the scene, simulate, free):
@@ -11,7 +11,8 @@ B. The simulation loop alone, after initialization (what differs between the int
    FMU loading and the parameter setting cost the same in both): fmpy's CVodeSolver stepping the
    model-exchange instance from grid point to grid point with event iteration (the loop of
    fmpy.simulate_fmu), against fmi2DoStep from grid point to grid point, with each of the FMU's
-   co-simulation methods (solver.method: auto, the default; BDF, as fmpy's CVode; Adams). Both
+   co-simulation methods (solver.method: auto, the default, RK45 while not stiff and BDF where
+   stiff; BDF, as fmpy's CVode; Adams; RK45 alone). Both
    read the six states at every grid point, with the same direct fmi2GetReal call
    (csfh.direct_calls, ~1 us per call); fmi2DoStep is called directly too, as csfh.simulate_cs
    does. The column "auto, fmpy calls" is the same CS loop through fmpy's FMU2Slave methods,
@@ -47,7 +48,7 @@ from csfh.runners.direct_calls import DirectCalls
 from csfh.runners.fmu import STATE_NAMES, simulate_cs, simulate_me
 
 LAW = "LN_spheres"
-METHODS = {"auto": 1, "BDF": 2, "Adams": 3}  # solver.method (enumeration CvodeMethod)
+METHODS = {"auto": 1, "BDF": 2, "Adams": 3, "RK45": 4}  # solver.method (enumeration SolverMethod)
 
 
 def interleaved(variants: dict[str, Callable[[], Any]], repeats: int) -> dict[str, float]:

@@ -1,9 +1,10 @@
 #define _POSIX_C_SOURCE 199309L
 /* Cost of one right-hand-side evaluation of the C model, and what switching parts off saves.
  * All configurations are timed in the same run, interleaved and repeated; the report gives the
- * median time per call and ratios to the full model. The stress outputs (flexure stress, Hertz
- * pressure: docs/model.md §14.2-14.3) are not part of the right-hand side: their cost is timed
- * separately, per evaluation, as what reading them costs at an output point. Build:
+ * median time per call, the fastest repeat (on a shared machine the least disturbed one: what
+ * the code itself costs) and ratios to the full model. The stress outputs (flexure stress,
+ * Hertz pressure: docs/model.md §14.2-14.3) are not part of the right-hand side: their cost is
+ * timed separately, per evaluation, as what reading them costs at an output point. Build:
  * cmake --build build --target bench_rhs; run: build/bench_rhs. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -107,17 +108,20 @@ int main(void)
             samples[c][r] = (now() - t0) / CALLS;
         }
     }
-    double median[NC];
+    double median[NC], fastest[NC];
     for (int c = 0; c < NC; c++) {
         qsort(samples[c], REPEATS, sizeof(double), cmp);
         median[c] = samples[c][REPEATS / 2];
+        fastest[c] = samples[c][0];
     }
-    printf("RHS cost of the C model (median of %d x %d calls)\n", REPEATS, CALLS);
-    printf("%-55s %10s %12s\n", "configuration", "ns/call", "vs full");
+    printf("RHS cost of the C model (%d repeats of %d calls)\n", REPEATS, CALLS);
+    printf("%-55s %10s %10s %9s\n", "configuration", "ns median", "ns best", "vs full");
     for (int c = 0; c < NC; c++) {
-        printf("%-55s %10.1f %12.3f\n", configs[c].name, 1e9 * median[c], median[c] / median[0]);
+        printf("%-55s %10.1f %10.1f %9.3f\n", configs[c].name, 1e9 * median[c], 1e9 * fastest[c],
+               median[c] / median[0]);
     }
-    printf("target: full model <= 300 ns per call: %s\n", median[0] <= 300e-9 ? "met" : "NOT met");
+    printf("target: full model in contact <= 80 ns per call: median %s, best repeat %s\n",
+           median[0] <= 80e-9 ? "met" : "NOT met", fastest[0] <= 80e-9 ? "met" : "NOT met");
     printf("the right-hand side evaluates no stress (csfh_model_derivatives); the stresses cost the\n"
            "last rows per output point that reads them (docs/model.md §14.5)\n");
     return sink == 12345.0;

@@ -26,7 +26,7 @@ enable_testing()
 # same glue with its own model and table
 set(_fuzz_sources_csfh ${CSFH_FMI_SOURCES} ${CSFH_CORE_SOURCES})
 set(_fuzz_sources_combdrive
-  fmu_src/fmi/fmi2_glue.c fmu_src/fmi/cosimulation.c
+  fmu_src/fmi/fmi2_glue.c fmu_src/fmi/cosimulation.c fmu_src/fmi/rk45.c
   fmu_src/combdrive/combdrive_model.c fmu_src/combdrive/combdrive_fmu_model.c
   fmu_src/core/csfh_vartable.c ${COMBDRIVE_GEN_DIR}/combdrive_variables.c)
 set(_fuzz_gen_csfh ${CSFH_GEN_DIR})
@@ -41,7 +41,7 @@ foreach(_fmu csfh combdrive)
                                fmu_src/combdrive ${_fuzz_gen_${_fmu}})
     target_compile_options(${_target} PRIVATE ${CSFH_WARNINGS} ${CSFH_FUZZ_FLAGS})
     # a hopeless step (fuzzed g = 1e20, tolerance 1e-300, a step of 1e300 s) fails at the same
-    # guard as in the FMU, after 20000 CVODE steps instead of 500000: seconds -> 0.1 s
+    # guard as in the FMU, after 20000 integrator steps instead of 500000: seconds -> 0.1 s
     target_compile_definitions(${_target} PRIVATE MAX_STEPS_PER_CALL=20000L)
     target_link_options(${_target} PRIVATE ${CSFH_FUZZ_FLAGS})
     target_link_libraries(${_target} PRIVATE ${CSFH_FUZZ_CVODE} m)

@@ -8,34 +8,39 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# each stage's header says when it started (the time since test.sh started), the last line the total
+stage() { printf '\n== %s  (at %dm%02ds)\n' "$1" $((SECONDS / 60)) $((SECONDS % 60)); }
+
 venv="${CSFH_VENV:-.venv}"
+stage "setup (tools/setup.sh)"
 tools/setup.sh --venv "$venv" --extras test,dask,cosim,docs
 # shellcheck disable=SC1091
 . "$venv/bin/activate"
 unset PYTHONPATH  # the tests use the installed package
 
-echo "== C unit tests (ASan + UBSan)"
+stage "C unit tests (ASan + UBSan)"
 cmake -S . -B build-asan -G Ninja -DCSFH_SANITIZE=ON -DCSFH_BUILD_FMU=OFF -DCMAKE_BUILD_TYPE=Debug >/dev/null
 cmake --build build-asan
 ctest --test-dir build-asan --output-on-failure
 
-echo "== FMI fuzz tests of both FMUs (ASan + UBSan + LeakSanitizer, fixed seeds)"
+stage "FMI fuzz tests of both FMUs (ASan + UBSan + LeakSanitizer, fixed seeds)"
 cmake -S . -B build-fuzz -G Ninja -DCSFH_FUZZ=ON -DCSFH_BUILD_TESTS=OFF -DCSFH_BUILD_BENCHMARKS=OFF \
   -DCSFH_PLATFORMS=host >/dev/null
 cmake --build build-fuzz --target csfh_fuzz
 ctest --test-dir build-fuzz -L fuzz --output-on-failure
 
-echo "== FMU build tree (every platform: cmake/platforms.cmake)"
+stage "FMU build tree (every platform: cmake/platforms.cmake)"
 cmake -S . -B build -G Ninja -DCSFH_PLATFORMS=all >/dev/null
 cmake --build build
 ctest --test-dir build -L sundials --output-on-failure
 
-echo "== Python tests"
+stage "Python tests"
 python3 -m pytest -q
 
-echo "== docs (Sphinx, warnings as errors)"
+stage "docs (Sphinx, warnings as errors)"
 python3 -m sphinx -W --keep-going -q -b html docs build/docs
 python3 tools/model_citations.py check
 
-echo "== lint"
+stage "lint"
 python3 -m ruff check python tests modelDescription benchmarks examples tools docs/conf.py
+printf '\n== all passed in %dm%02ds\n' $((SECONDS / 60)) $((SECONDS % 60))

@@ -6,6 +6,12 @@
 
 static void eccentricity(const double s1bar[2], const double q[3], double e[2], double s1[2])
 {
+    if (s1bar[0] == 0.0 && s1bar[1] == 0.0) { /* O1 at G1 (the paper's scenes): no rotation */
+        s1[0] = s1[1] = 0.0;
+        e[0] = q[0];
+        e[1] = q[1];
+        return;
+    }
     const double c = cos(q[2]), s = sin(q[2]);
     s1[0] = c * s1bar[0] - s * s1bar[1];
     s1[1] = s * s1bar[0] + c * s1bar[1];
@@ -16,11 +22,8 @@ static void eccentricity(const double s1bar[2], const double q[3], double e[2], 
 double csfh_contact_gap(double delta, const double s1bar[2], const double q[3])
 {
     double e[2], s1[2];
-    if (s1bar[0] == 0.0 && s1bar[1] == 0.0) {
-        return delta - hypot(q[0], q[1]);
-    }
     eccentricity(s1bar, q, e, s1);
-    return delta - hypot(e[0], e[1]);
+    return delta - csfh_norm2(e[0], e[1]);
 }
 
 void csfh_contact_kinematics(double delta, double R1, const double s1bar[2], const double q[3],
@@ -28,7 +31,7 @@ void csfh_contact_kinematics(double delta, double R1, const double s1bar[2], con
 {
     double e[2], s1[2];
     eccentricity(s1bar, q, e, s1);
-    const double en = hypot(e[0], e[1]);
+    const double en = csfh_norm2(e[0], e[1]);
     kin->e_norm = en;
     kin->gap = delta - en;
     if (en > 1e-300) {

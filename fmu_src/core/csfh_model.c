@@ -301,12 +301,15 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
     if (!m->z.in_contact && !m->contact_by_gap) {
         return;
     }
-    const double gap = csfh_contact_gap(m->d.delta, m->p.s1bar, q);
-    if (!(gap < 0.0)) {
+    if (!m->z.in_contact && !(csfh_contact_gap(m->d.delta, m->p.s1bar, q) < 0.0)) {
+        return; /* contact_by_gap, in flight: the gap alone */
+    }
+    /* in the contact mode the bodies touch almost always: the kinematics (with the gap) once */
+    csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, q, &c->kin);
+    if (!(c->kin.gap < 0.0)) {
         return;
     }
     c->touching = 1;
-    csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, q, &c->kin);
     c->rho = -c->kin.gap;
     c->rho_dot = -(c->kin.DN[0] * u[0] + c->kin.DN[1] * u[1] + c->kin.DN[2] * u[2]);
     /* the onset rate captured at the event (PHYSICS.md 5.2); before the event (contact_by_gap)
@@ -422,6 +425,13 @@ void csfh_model_init_discrete(csfh_model_t *m)
     m->z.onset_time = m->z.release_time = m->time; /* until a contact happens */
     m->z.release_speed = 0.0;
     csfh_model_event_update(m);
+}
+
+int csfh_model_peaks_tracked(const csfh_model_t *m)
+{
+    const int contact = m->z.in_contact && m->p.law != CSFH_CONTACTLAW_NONE;
+    const int stress = m->p.track_stress_peak && m->p.flexure_enabled;
+    return contact || stress;
 }
 
 int csfh_model_peak_values(csfh_model_t *m, const double x[6], double v[CSFH_N_PEAKS])

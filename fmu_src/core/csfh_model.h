@@ -118,7 +118,7 @@ typedef struct {
     csfh_outputs_t out;
     csfh_counters_t counters;
     csfh_peaks_t peaks;
-    int cs_method;      /* solver.method (CvodeMethod): read by the co-simulation glue only */
+    int cs_method;      /* solver.method (SolverMethod): read by the co-simulation glue only */
     int cs_method_number; /* 0, or the solver.method value to set (libcosim) */
     int contact_by_gap; /* 1: the contact force acts wherever the gap is negative, also before
                          * the onset event (the paper's RK4 scheme, which has no root finding
@@ -207,6 +207,10 @@ int csfh_model_event_update(csfh_model_t *m);
 /* The quantities of the peak outputs at state x with the current contact mode: v = {F_N, |F_T|,
  * indentation}. Returns 0 (and zeros) outside the contact mode, without evaluating anything. */
 int csfh_model_peak_values(csfh_model_t *m, const double x[6], double v[CSFH_N_PEAKS]);
+
+/* 1 if csfh_model_peak_values can return anything but zeros in the current discrete state and
+ * parameters (the contact mode, or the flexure stress tracked), whatever the state. */
+int csfh_model_peaks_tracked(const csfh_model_t *m);
 
 /* Stresses at one configuration (docs/model.md §14.2-14.3). */
 typedef struct {

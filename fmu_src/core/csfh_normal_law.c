@@ -124,7 +124,7 @@ double csfh_esdu_tangent_stiffness(const csfh_esdu_t *esdu, double F)
 int csfh_normal_elastic_force(const csfh_normal_law_t *law, double rho, double *F_el)
 {
     if (law->law != CSFH_CONTACTLAW_LN_ESDU) {
-        *F_el = law->K * pow(rho, law->n); /* Eq. (13) */
+        *F_el = law->K * csfh_pow_n(rho, law->n); /* Eq. (13) */
         return CSFH_LAW_OK;
     }
     double F_esdu;
@@ -136,7 +136,7 @@ int csfh_normal_elastic_force(const csfh_normal_law_t *law, double rho, double *
         const double K_t = status == CSFH_LAW_OK && F_esdu > 0.0
                                ? csfh_esdu_tangent_stiffness(&law->esdu, F_esdu)
                                : csfh_esdu_tangent_stiffness(&law->esdu, 0.5 * law->esdu.F_max);
-        *F_el = K_t * pow(rho, law->n);
+        *F_el = K_t * csfh_pow_n(rho, law->n);
     }
     return status;
 }
@@ -187,7 +187,7 @@ double csfh_normal_elastic_energy(const csfh_normal_law_t *law, double rho)
         return 0.0;
     }
     if (law->law != CSFH_CONTACTLAW_LN_ESDU) {
-        return law->K * pow(rho, law->n + 1.0) / (law->n + 1.0);
+        return law->K * rho * csfh_pow_n(rho, law->n) / (law->n + 1.0);
     }
     if (law->esdu_reading == CSFH_ESDUREADING_I2) {
         /* closed form: U = a F^2 [ln(F_max/F)/2 + 1/4] (dU/drho = F with rho(F) of Eq. 18) */

@@ -58,12 +58,15 @@ static int event_update(void *mv, char *msg, size_t msg_size)
 {
     csfh_model_t *m = (csfh_model_t *)mv;
     const int change = csfh_model_event_update(m);
+    if (msg_size == 0) {
+        return change; /* not logged: nothing to format */
+    }
     if (change == 1) {
         snprintf(msg, msg_size, "t = %.17g: contact %d starts, onset indentation rate %g m/s",
                  m->time, m->z.contact_count, m->z.onset_speed);
     } else if (change == 2) {
         snprintf(msg, msg_size, "t = %.17g: contact ends", m->time);
-    } else if (msg_size > 0) {
+    } else {
         msg[0] = '\0';
     }
     return change;
@@ -99,10 +102,12 @@ static int outputs(void *mv, char *msg, size_t msg_size)
 static int cs_method(const void *mv)
 {
     switch (((const csfh_model_t *)mv)->cs_method) {
-    case CSFH_CVODEMETHOD_BDF:
+    case CSFH_SOLVERMETHOD_BDF:
         return FMU_CS_BDF;
-    case CSFH_CVODEMETHOD_ADAMS:
+    case CSFH_SOLVERMETHOD_ADAMS:
         return FMU_CS_ADAMS;
+    case CSFH_SOLVERMETHOD_RK45:
+        return FMU_CS_RK45;
     default:
         return FMU_CS_AUTO;
     }
@@ -140,6 +145,16 @@ static void peaks_add(void *mv, const double *v)
     for (int j = 0; j < CSFH_N_PEAKS; j++) {
         m->peaks.v[j] = v[j] > m->peaks.v[j] ? v[j] : m->peaks.v[j];
     }
+}
+
+static void peaks_state(void *m, const void *from)
+{
+    ((csfh_model_t *)m)->z = ((const csfh_model_t *)from)->z;
+}
+
+static int peaks_tracked(const void *m)
+{
+    return csfh_model_peaks_tracked((const csfh_model_t *)m);
 }
 
 /* Restored FMU state: the fields that are not stored table variables (checked by the glue:
@@ -211,5 +226,7 @@ const fmu_model_t fmu_model = {
     .peaks_begin = peaks_begin,
     .peak_values = peak_values,
     .peaks_add = peaks_add,
+    .peaks_state = peaks_state,
+    .peaks_tracked = peaks_tracked,
     .check_state = check_state,
 };

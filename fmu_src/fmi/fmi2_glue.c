@@ -191,6 +191,7 @@ fmi2Status fmu_update_outputs(fmu_instance_t *inst, const char *function)
     if (prepare(inst, function) != fmi2OK) {
         return fmi2Error;
     }
+    cs_peaks_flush(inst); /* the peak outputs of the communication step */
     char msg[MSG_SIZE];
     msg[0] = '\0';
     const int status = fmu_model.outputs(inst->model, msg, sizeof(msg));
@@ -214,10 +215,13 @@ int fmu_event_update(fmu_instance_t *inst)
     if (fmu_model.n_event_indicators == 0) {
         return 0;
     }
+    /* the message is formatted only when it will be logged (an event costs far less than its
+     * 17-digit message) */
+    const int logged = inst->logger != NULL && (inst->log_categories & LOG_EVENTS) != 0;
     char msg[MSG_SIZE];
     msg[0] = '\0';
-    const int change = fmu_model.event_update(inst->model, msg, sizeof(msg));
-    if (msg[0] != '\0') {
+    const int change = fmu_model.event_update(inst->model, msg, logged ? sizeof(msg) : 0);
+    if (logged && msg[0] != '\0') {
         fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", msg);
     }
     if (change != 0) {
@@ -635,6 +639,9 @@ static fmi2Status set_values(fmu_instance_t *inst, const char *function,
         tunable = tunable || (v->causality == CSFH_CAUS_PARAMETER &&
                               !(inst->state & (FMU_INSTANTIATED | FMU_INITIALIZATION)));
     }
+    /* every value is valid: first the peaks of the communication step, with the values they
+     * were taken with (a parameter changes them; kept if the new ones are rolled back) */
+    cs_peaks_flush(inst);
     void *saved = NULL;
     if (tunable) { /* tunable parameters while running: apply, re-validate, roll back on failure */
         saved = malloc(fmu_model.size);
@@ -939,6 +946,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     } else if (!state_owned(inst, s, "fmi2GetFMUstate")) {
         return fmi2Error;
     }
+    cs_peaks_flush(inst); /* the snapshot holds the peaks of the communication step */
     snapshot_take(inst, s);
     /* CVODE's history (step size, order, Nordsieck array) is not part of the snapshot, and
      * fmi2SetFMUstate restarts the integrator at the restored point. Restart it here as well, so

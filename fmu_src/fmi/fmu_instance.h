@@ -106,5 +106,9 @@ void cs_free(fmu_instance_t *inst);
 /* Integrate from the FMU's time to t_end (> the FMU's time; fmi2DoStep checked the arguments). */
 fmi2Status cs_do_step(fmu_instance_t *inst, double t_end);
 fmi2Status cs_reset(fmu_instance_t *inst);
+/* Bring the peak outputs of the communication step up to date (the co-simulation stepper
+ * analyses RK45's steps for them only when needed): before the outputs are computed, an FMU
+ * state is taken or values are set. Nothing without co-simulation. */
+void cs_peaks_flush(fmu_instance_t *inst);
 
 #endif

@@ -24,9 +24,10 @@
 #define FMU_MODEL_NONFINITE (-1)
 
 /* Integration methods of the co-simulation interface (cosimulation.c). */
-#define FMU_CS_AUTO 0  /* Adams with fixed-point iteration, BDF while stiff */
-#define FMU_CS_BDF 1   /* BDF, Newton iteration, dense linear solver */
-#define FMU_CS_ADAMS 2 /* Adams-Moulton, fixed-point iteration */
+#define FMU_CS_AUTO 0  /* RK45, BDF while stiff */
+#define FMU_CS_BDF 1   /* CVODE: BDF, Newton iteration, dense linear solver */
+#define FMU_CS_ADAMS 2 /* CVODE: Adams-Moulton, fixed-point iteration */
+#define FMU_CS_RK45 3  /* explicit Runge-Kutta 5(4), Dormand-Prince (rk45.c) */
 
 #define FMU_MAX_PEAKS 8 /* peak outputs tracked by the co-simulation stepper */
 
@@ -65,14 +66,15 @@ typedef struct {
     void (*event_indicators)(const void *m, const double *x, double *z);
     /* Discrete-state update at an event (from the model's time and state): 0 if nothing changed,
      * > 0 if the discrete state changed (the integrator must restart); writes a logEvents
-     * message. NULL when n_event_indicators == 0. */
+     * message (none when msg_size is 0: logging is off). NULL when n_event_indicators == 0. */
     int (*event_update)(void *m, char *msg, size_t msg_size);
     /* Fill the outputs at the current time, state and inputs: FMU_MODEL_OK, FMU_MODEL_WARNING
      * (message) or FMU_MODEL_NONFINITE (message). */
     int (*outputs)(void *m, char *msg, size_t msg_size);
     /* Add co-simulation integrator steps to the model's counter (may be NULL). */
     void (*add_integrator_steps)(void *m, long steps);
-    /* The co-simulation method, FMU_CS_AUTO, FMU_CS_BDF or FMU_CS_ADAMS (NULL: BDF). */
+    /* The co-simulation method, FMU_CS_AUTO, FMU_CS_BDF, FMU_CS_ADAMS or FMU_CS_RK45 (NULL:
+     * BDF). */
     int (*cs_method)(const void *m);
     /* Peak outputs of co-simulation (all NULL and n_peaks 0: none): the co-simulation stepper
      * tracks the largest values of n_peaks (<= FMU_MAX_PEAKS) quantities over each
@@ -85,6 +87,13 @@ typedef struct {
     void (*peaks_begin)(void *m, int outputs_current);
     int (*peak_values)(void *m, const double *x, double *v);
     void (*peaks_add)(void *m, const double *v);
+    /* Copy into m, from the model struct `from`, the discrete state the peak quantities depend
+     * on (csfh: the contact mode and onset rate), so that a step can be analysed for its peaks
+     * after an event has changed it (NULL: every step is analysed when taken). */
+    void (*peaks_state)(void *m, const void *from);
+    /* 1 if the peak quantities can be nonzero in the current discrete state (csfh: in the
+     * contact mode), 0 if peak_values would return 0 whatever the state (NULL: always 1). */
+    int (*peaks_tracked)(const void *m);
     /* A restored FMU state (fmi2SetFMUstate, fmi2DeSerializeFMUstate): check the fields of the
      * model struct that are neither stored table variables (the glue checks those: finite, in
      * range) nor recomputed (derived quantities, outputs, derivative cache), e.g. counts that

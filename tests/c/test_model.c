@@ -673,10 +673,10 @@ static void test_start_check_peaks_and_numbers(void)
     /* NAME_number, when not 0, sets the Enumeration in prepare */
     csfh_model_set_defaults(&m);
     set_by_name(&m, "contact.law_number", CSFH_CONTACTLAW_LN_CYLINDERS);
-    set_by_name(&m, "solver.method_number", CSFH_CVODEMETHOD_ADAMS);
+    set_by_name(&m, "solver.method_number", CSFH_SOLVERMETHOD_RK45);
     CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare with the numbers");
     CHECK_INT(m.p.law, CSFH_CONTACTLAW_LN_CYLINDERS, "contact.law set by its number");
-    CHECK_INT(m.cs_method, CSFH_CVODEMETHOD_ADAMS, "solver.method set by its number");
+    CHECK_INT(m.cs_method, CSFH_SOLVERMETHOD_RK45, "solver.method set by its number");
     CHECK_ABS(m.d.normal.K, m.d.K_cylinders, 0.0, "the cylinder stiffness is in use");
     set_by_name(&m, "contact.law_number", 7);
     CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), -1, "law number 7 refused");

@@ -449,7 +449,7 @@ BAD_INPUTS: list[tuple[list[tuple[str, float]], tuple[str, float]]] = [
     ([("contact.law", 0)], ("contact.law", 0)),
     ([("contact.law", 7)], ("contact.law", 7)),
     ([("solver.method", 0)], ("solver.method", 0)),
-    ([("solver.method", 4)], ("solver.method", 4)),
+    ([("solver.method", 5)], ("solver.method", 5)),
     ([("contact.law", -1)], ("contact.law", -1)),
     ([("contact.esdu_reading", 0)], ("contact.esdu_reading", 0)),
     ([("contact.esdu_reading", 3)], ("contact.esdu_reading", 3)),

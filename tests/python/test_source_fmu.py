@@ -21,6 +21,7 @@ NOMINAL = {"body1.x": 0.01, "body1.y": 0.01, "body1.theta": 0.1}
 CSFH_SOURCES = {
     "fmi2_glue.c",
     "cosimulation.c",
+    "rk45.c",
     "csfh_fmu_model.c",
     "csfh_flexure.c",
     "csfh_contact.c",

@@ -40,8 +40,9 @@ def register(sub: Any) -> None:
         sub,
         "accuracy",
         help="error against run time of every integrator (report.md)",
-        description="Run every integrator (model exchange and co-simulation with CVODE at "
-        "rtol 1e-3 ... 1e-10, the paper's RK4 + bisection, Moreau at h = 1e-3 ... 1e-6 s) on "
+        description="Run every integrator (model exchange, co-simulation with the FMU's auto "
+        "method (RK45) and with CVODE Adams, at rtol 1e-3 ... 1e-10, the paper's RK4 + "
+        "bisection, Moreau at h = 1e-3 ... 1e-6 s) on "
         "every model of a scene, measure the contact-time, peak, indentation, rebound and "
         "trajectory errors over the first three contacts against a tighter reference, and "
         "write report.md, accuracy.json and work-precision figures.",

@@ -86,7 +86,7 @@ def _scene_options(p: argparse.ArgumentParser) -> None:
         choices=("me", "cs"),
         default="me",
         help="FMU interface of the event-driven models: me = model exchange with fmpy's CVode, "
-        "cs = co-simulation, CVODE inside the FMU",
+        "cs = co-simulation, the integrator inside the FMU (auto: RK45, BDF where stiff)",
     )
     add_quiet(p)
 

@@ -37,8 +37,8 @@ def _execution_options(p: argparse.ArgumentParser, command: str) -> None:
         choices=("me", "cs"),
         default="me",
         help="FMU interface of the event-driven models: me = model exchange with fmpy's "
-        "CVode, events located exactly, one run at a time; cs = co-simulation, CVODE inside the "
-        "FMU, the runs batched (tens of times faster)",
+        "CVode, events located exactly, one run at a time; cs = co-simulation, the integrator "
+        "inside the FMU, the runs batched (tens of times faster)",
     )
     p.add_argument(
         "--stop-time",
@@ -137,8 +137,8 @@ def _check_models(models: list[str] | None, default: tuple[str, ...]) -> tuple[s
 def _interface_text(interface: str, rtol: float) -> str:
     if interface == "cs":
         return (
-            f"co-simulation (CVODE inside the FMU; the runs batched in the FMU's own binary by "
-            f"the batch master), rtol {rtol:g}"
+            f"co-simulation (the integrator inside the FMU; the runs batched in the FMU's own "
+            f"binary by the batch master), rtol {rtol:g}"
         )
     return f"model exchange with fmpy's CVode (BDF, events by root finding), rtol {rtol:g}"
 

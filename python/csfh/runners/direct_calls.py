@@ -54,11 +54,14 @@ class DirectCalls:
         self._component = c_void_p(slave.component)
         self._do_step = _function(self._dll, "fmi2DoStep")
         self._true = c_int(1)
+        self._t, self._h = c_double(), c_double()  # reused: cheaper than new ones per call
 
     def do_step(self, t: float, h: float) -> None:
         """fmi2DoStep(t, h); raises fmpy's FMICallException on fmi2Error or worse (the FMU's
         log says why)."""
-        status = self._do_step(self._component, c_double(t), c_double(h), self._true)
+        self._t.value = t
+        self._h.value = h
+        status = self._do_step(self._component, self._t, self._h, self._true)
         if status > _FMI2_WARNING:
             raise FMICallException(function="fmi2DoStep", status=status)
 

@@ -490,7 +490,7 @@ def cs_method_name(scene: Scene, parameters: dict[str, Any] | None = None) -> st
     values = {**scene.parameter_values(), **(parameters or {})}
     start = int(model_info.variables()["solver.method"].start)  # the XML holds a string
     value = model_info.coerce("solver.method", values.get("solver.method", start))
-    names = {v: k for k, v in model_info.enumeration("CvodeMethod").items()}
+    names = {v: k for k, v in model_info.enumeration("SolverMethod").items()}
     return names.get(int(value), str(value))
 
 
@@ -588,7 +588,7 @@ def simulate_cs(
         contact_records=cr,
     )
     tr.stats = {
-        "integrator": f"CVODE ({cs_method_name(scene, parameters)}) inside the FMU "
+        "integrator": f"{cs_method_name(scene, parameters)} inside the FMU "
         f"(co-simulation) rtol={rtol:g}, communication step {h:g} s",
         "steps": int(steps),
         "rhs_evaluations": int(rhs),

@@ -11,7 +11,16 @@ from .metrics import METRIC_LABELS, METRICS, Study, plotted
 
 STYLE = {
     ("ME", "self"): {"color": "tab:blue", "marker": "o", "label": "ME, fmpy CVode (BDF)"},
-    ("CS", "self"): {"color": "tab:green", "marker": "s", "label": "CS, CVODE in the FMU (auto)"},
+    ("CS", "self"): {
+        "color": "tab:green",
+        "marker": "s",
+        "label": "CS, RK45 in the FMU (auto)",
+    },
+    ("CS-Adams", "self"): {
+        "color": "tab:olive",
+        "marker": "P",
+        "label": "CS, CVODE Adams in the FMU",
+    },
     ("RK4", "self"): {"color": "tab:orange", "marker": "^", "label": "RK4 + bisection (paper)"},
     ("Moreau", "self"): {"color": "tab:red", "marker": "D", "label": "Moreau vs Moreau(h->0)"},
     ("Moreau", "LN_spheres"): {

@@ -23,7 +23,7 @@ def introduction(study: Study) -> list[str]:
         "* **contact time**: largest |t_k - t_k,ref| of the contact onsets, s;",
         "* **peak F_N** and **max indentation**: largest relative error of the per-contact "
         "maxima (ME locates them on CVODE's interpolant; RK4 takes its accepted steps; the "
-        "co-simulation interface shows only communication points, so CS reports neither);",
+        "co-simulation runs read only communication points, so CS reports neither);",
         "* **rebound velocity**: largest relative error of the separation speed dg/dt at the "
         "end of each contact;",
         "* **trajectory**: max |q - q_ref| with |q| = max(|x|, |y|, R1 |theta|), over the "
@@ -40,7 +40,9 @@ def introduction(study: Study) -> list[str]:
         "median wall time of repeated runs on this machine. ME's wall time includes fmpy "
         "calling the FMU from Python at every right-hand side, as a user of model exchange "
         "through fmpy experiences it; for CS it is the time spent inside fmi2DoStep (observed "
-        "every 10 ms), i.e. the C integration; RK4 and Moreau run in C.",
+        "every 10 ms), i.e. the C integration; RK4 and Moreau run in C. CS is the FMU's default "
+        "method, auto (the explicit Runge-Kutta 5(4) RK45 while the motion is not stiff, BDF "
+        "where it is); CS-Adams is CVODE's Adams-Moulton, the FMU's default before RK45.",
     ]
 
 
@@ -64,7 +66,7 @@ def conclusions(study: Study, groups: dict[tuple[str, str, str], list[Point]]) -
             f"* **{model}**: the paper's setting ({paper.label}) gets the contact times to "
             f"{e:.1e} s with {paper.rhs_evaluations} RHS evaluations."
         )
-        for integ in ("CS", "ME"):
+        for integ in ("CS", "CS-Adams", "ME"):
             best = _cheapest(
                 groups.get((model, integ, "self"), []), "contact_time", e, "rhs_evaluations"
             )
@@ -92,9 +94,10 @@ def conclusions(study: Study, groups: dict[tuple[str, str, str], list[Point]]) -
         + "; ".join(orders)
         + ".",
         "",
-        "ME and CS are close to first order in the tolerance, as a well-behaved adaptive "
-        "integrator should be (the error follows the tolerance). Moreau is first order in h, "
-        "and against the compliant reference its error is flat: the rigid and the compliant "
+        "ME and CS (both methods) are close to first order in the tolerance, as a well-behaved "
+        "adaptive integrator should be (the error follows the tolerance). Moreau is first "
+        "order in h, and against the compliant reference its error is flat: the rigid and the "
+        "compliant "
         "model differ by a fixed amount that no step size removes. The RK4 slopes are against "
         "h0 while the event tolerance shrinks ten times per halving of h0, so the contact-time "
         "error follows the event tolerance: "
@@ -110,9 +113,9 @@ def conclusions(study: Study, groups: dict[tuple[str, str, str], list[Point]]) -
         "Which method for which purpose:",
         "",
         "* contact forces, indentation and impact timing (wear, stress): an event-driven "
-        "compliant model with CVODE (CS inside a system simulation, ME when the host tool "
-        "integrates); the error falls steadily with the tolerance and the onsets are located by "
-        "root finding, not by step bisection;",
+        "compliant model with an adaptive integrator (CS inside a system simulation, ME when "
+        "the host tool integrates); the error falls steadily with the tolerance and the onsets "
+        "are located by root finding, not by step bisection;",
         "* gross motion, many impacts, resting and rolling contact, parameter sweeps: Moreau, "
         "cheap and robust but first order in the impact times, and blind to the compliance;",
         "* the paper's RK4 + bisection: only as a baseline; its contact-time error is set by "

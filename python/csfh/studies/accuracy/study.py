@@ -3,7 +3,11 @@
 For each event-driven model (LN_spheres, LN_cylinders, LN_ESDU) the integrators are
 
 * ``ME``: model exchange of the FMU with fmpy's CVode (BDF), relative tolerance 1e-3 ... 1e-10;
-* ``CS``: co-simulation, CVODE inside the FMU (its default method, auto), the same tolerances;
+* ``CS``: co-simulation with the integrator inside the FMU (its default method, auto: the
+  explicit Runge-Kutta 5(4) RK45 while the motion is not stiff, BDF where it is), the same
+  tolerances;
+* ``CS-Adams``: co-simulation with CVODE's Adams-Moulton inside the FMU (solver.method Adams,
+  the former default), the same tolerances;
 * ``RK4``: the paper's scheme, explicit RK4 with step bisection to the event tolerance, at the
   paper's (h0 = 2e-4 s, 1e-4 m) and at tighter settings;
 
@@ -40,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from ...model import model_info
 from ...model.scene import Scene
 from ...progress import Progress
 from ...runners.fmu import simulate_cs, simulate_me
@@ -61,18 +66,23 @@ from .metrics import (
 DEFAULT_SETTINGS: dict[str, list[Any]] = {
     "ME": [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
     "CS": [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
+    "CS-Adams": [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
     "RK4": [(2e-4, 1e-4), (1e-4, 1e-5), (5e-5, 1e-6), (2.5e-5, 1e-7), (1.25e-5, 1e-8)],
     "Moreau": [1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6],
 }
 QUICK_SETTINGS: dict[str, list[Any]] = {
     "ME": [1e-4, 1e-6, 1e-8],
     "CS": [1e-4, 1e-6, 1e-8],
+    "CS-Adams": [1e-4, 1e-6, 1e-8],
     "RK4": [(2e-4, 1e-4), (5e-5, 1e-6)],
     "Moreau": [1e-4, 1e-5, 1e-6],
 }
 REF_RTOL = 1e-13
 REF_MOREAU_H = 1e-9
 CS_COMMUNICATION_STEP = 1e-2  # s: the co-simulation runs are observed at these points
+CS_METHODS: dict[str, str | None] = {"CS": None, "CS-Adams": "Adams"}
+"""The co-simulation integrators: their solver.method (None: the FMU's default, auto)."""
+INTEGRATORS = ("ME", *CS_METHODS, "RK4")  # of the compliant models
 
 
 # ------------------------------------------------------------------------------------------
@@ -112,7 +122,8 @@ def run_study(
     settings = settings or DEFAULT_SETTINGS
     if ref_rtol is None:
         ref_rtol = max(
-            REF_RTOL, 1e-3 * min(settings.get("ME", []) + settings.get("CS", []) + [1e-10])
+            REF_RTOL,
+            1e-3 * min([s for i in ("ME", *CS_METHODS) for s in settings.get(i, [])] + [1e-10]),
         )
     if ref_moreau_h is None:
         ref_moreau_h = max(REF_MOREAU_H, 1e-3 * min(settings.get("Moreau", [1e-6])))
@@ -122,7 +133,7 @@ def run_study(
     radius = float(sc.parameter_values().get("contact.R1", 0.18))
     grid = _grid(sc, t_end)
     study = Study(scene=scene.name, stop_time=t_end)
-    total = sum(len(settings.get(i, [])) for i in ("ME", "CS", "RK4")) * sum(
+    total = sum(len(settings.get(i, [])) for i in INTEGRATORS) * sum(
         m in COMPLIANT for m in models
     ) + len(settings.get("Moreau", [])) * ("Moreau" in models)
     progress = Progress(f"accuracy {scene.name}", quiet=quiet, total=total)
@@ -142,7 +153,7 @@ def run_study(
         refs[model] = ref
         study.references[model] = f"ME CVode rtol {ref_rtol:g} (check: {ref_rtol / 2:g})"
         study.reference_checks[model] = _reference_change(half, ref, t_end, radius)
-        for integ in ("ME", "CS", "RK4"):
+        for integ in INTEGRATORS:
             for setting in settings.get(integ, []):
                 study.points.append(
                     _measure(sc, model, integ, setting, ref, grid, t_end, radius, repeats, ref_rtol)
@@ -229,15 +240,24 @@ def _measure(
             lambda: simulate_me(sc, model, rtol=setting, output_times=grid), repeats
         )
         return _point(model, "ME", setting, f"rtol = {setting:g}", tr, wall, ref, t_end, radius)
-    if integ == "CS":
+    if integ in CS_METHODS:
+        method = CS_METHODS[integ]
+        numbers = model_info.enumeration("SolverMethod")
+        parameters = None if method is None else {"solver.method": numbers[method]}
         tr, _ = _median_run(
-            lambda: simulate_cs(sc, model, rtol=setting, communication_step=CS_COMMUNICATION_STEP),
+            lambda: simulate_cs(
+                sc,
+                model,
+                rtol=setting,
+                communication_step=CS_COMMUNICATION_STEP,
+                parameters=parameters,
+            ),
             repeats,
         )
         wall = tr.stats["do_step_time"]  # time inside fmi2DoStep: the integration itself
         return _point(
             model,
-            "CS",
+            integ,
             setting,
             f"rtol = {setting:g}",
             tr,

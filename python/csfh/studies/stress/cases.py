@@ -27,7 +27,7 @@ class Case:
     t_contact_by_model: dict[str, float] = field(default_factory=dict)
 
 
-COMPLIANT_INTEGRATORS = ("ME", "CS", "RK4")
+COMPLIANT_INTEGRATORS = ("ME", "CS", "CS-RK45", "RK4")
 
 
 def _runs(models: tuple[str, ...]) -> list[tuple[str, str]]:

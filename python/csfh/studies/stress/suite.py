@@ -10,9 +10,10 @@ Verdicts:
   than delta / v_T); the run may have stopped with a clear, specific error;
 * ``fail``: anything else — a bug to fix.
 
-Integrators: model exchange with fmpy's CVode (``ME``, rtol 1e-10), co-simulation with CVODE in
-the FMU (``CS``, rtol 1e-10, method auto), the paper's RK4 + bisection (``RK4``, h0 = 2e-4 s,
-1e-4 m) and the Moreau stepper (h = 1e-5 s).
+Integrators: model exchange with fmpy's CVode (``ME``, rtol 1e-10), co-simulation with the
+integrator in the FMU (``CS``, rtol 1e-10, method auto: RK45, BDF where the motion is stiff; and
+``CS-RK45``, the explicit Runge-Kutta 5(4) alone, however stiff), the paper's RK4 + bisection
+(``RK4``, h0 = 2e-4 s, 1e-4 m) and the Moreau stepper (h = 1e-5 s).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import SimulationError
+from ...model import model_info
 from ...progress import Progress
 from ...runners.fmu import simulate_cs, simulate_me
 from ...runners.moreau import moreau
@@ -35,6 +37,8 @@ from .cases import Case
 from .oracles import M1, MOREAU_H, RK4_H0, RK4_TOL, RTOL
 
 ENERGY_RTOL = 1e4 * RTOL  # allowed numerical energy gain of ME/CS, relative to the energy scale
+CS_METHODS: dict[str, str | None] = {"CS": None, "CS-RK45": "RK45"}
+"""The co-simulation integrators: their solver.method (None: the FMU's default, auto)."""
 
 
 @dataclass
@@ -55,8 +59,16 @@ def _run_one(case: Case, model: str, integ: str) -> tuple[Trajectory | None, str
             tr = moreau(case.scene, h=MOREAU_H)
         elif integ == "ME":
             tr = simulate_me(case.scene, model, rtol=RTOL)
-        elif integ == "CS":
-            tr = simulate_cs(case.scene, model, rtol=RTOL, communication_step=1e-3)
+        elif integ in CS_METHODS:
+            method = CS_METHODS[integ]
+            parameters = (
+                None
+                if method is None
+                else {"solver.method": model_info.enumeration("SolverMethod")[method]}
+            )
+            tr = simulate_cs(
+                case.scene, model, rtol=RTOL, communication_step=1e-3, parameters=parameters
+            )
         else:
             tr = rk4_event(case.scene, model, h0=RK4_H0, tol=RK4_TOL)
     except (SimulationError, FloatingPointError, ValueError) as exc:
@@ -65,11 +77,11 @@ def _run_one(case: Case, model: str, integ: str) -> tuple[Trajectory | None, str
 
 
 def _energy_allowance(tr: Trajectory, integ: str, E0: float) -> float:
-    """Numerical energy gain an integrator may show without anything being wrong: for CVODE
-    what its relative tolerance and its absolute tolerances (rtol times the state nominals,
-    0.01 m and 1 m/s) allow, given the largest contact force and speed of the run; Moreau and
-    RK4 round-off."""
-    if integ in ("ME", "CS"):
+    """Numerical energy gain an integrator may show without anything being wrong: for the
+    adaptive integrators (ME, CS) what their relative tolerance and their absolute tolerances
+    (rtol times the state nominals, 0.01 m and 1 m/s) allow, given the largest contact force and
+    speed of the run; Moreau and RK4 round-off."""
+    if integ == "ME" or integ in CS_METHODS:
         peak_F = float(np.max(np.abs(tr.table["F_N"]), initial=0.0))
         v_max = float(np.max(np.hypot(tr.table["vx"], tr.table["vy"]), initial=0.0))
         return ENERGY_RTOL * E0 + 10 * (peak_F * 0.01 * RTOL + M1 * v_max * RTOL)
