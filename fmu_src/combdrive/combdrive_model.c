@@ -55,15 +55,33 @@ int combdrive_prepare(combdrive_model_t *m, char *msg, size_t msg_size)
                  csfh_format_value(b2, p->thickness), csfh_format_value(b3, p->gap));
         return -1;
     }
+    if (!(p->ramp.t1 >= p->ramp.t0)) {
+        char b1[32], b2[32];
+        snprintf(msg, msg_size, "ramp.t1 = %s must not be smaller than ramp.t0 = %s",
+                 csfh_format_value(b1, p->ramp.t1), csfh_format_value(b2, p->ramp.t0));
+        return -1;
+    }
     m->d.k = k;
     m->d.dir[0] = cos(p->direction);
     m->d.dir[1] = sin(p->direction);
     return 0;
 }
 
+double combdrive_ramp(double V0, double V1, double t0, double t1, double t)
+{
+    if (t <= t0) {
+        return V0;
+    }
+    if (t >= t1) {
+        return V1;
+    }
+    return V0 + (V1 - V0) * (t - t0) / (t1 - t0);
+}
+
 int combdrive_outputs(combdrive_model_t *m, char *msg, size_t msg_size)
 {
-    const double V = m->u_in[0];
+    const double V = m->u_in[0] + combdrive_ramp(m->p.ramp.V0, m->p.ramp.V1, m->p.ramp.t0,
+                                                 m->p.ramp.t1, m->time);
     const double theta = m->u_in[1];
     combdrive_outputs_t o;
     o.F = m->d.k * V * V; /* n eps t V^2 / g */

@@ -38,6 +38,9 @@ typedef struct {
     double permittivity;  /* eps, F/m */
     double direction;     /* rad, global frame */
     double arm[2];        /* application point relative to G1, body frame, m */
+    struct {
+        double V0, V1, t0, t1; /* V0 until t0, linear to V1 at t1, V1 after (V, s) */
+    } ramp;               /* added to the input V */
 } combdrive_params_t;
 
 typedef struct {
@@ -64,7 +67,11 @@ void combdrive_set_defaults(combdrive_model_t *m);
  * 0, or -1 with a message naming the variable and its value (the model is then unchanged). */
 int combdrive_prepare(combdrive_model_t *m, char *msg, size_t msg_size);
 
-/* F, F_x, F_y, M at the current inputs. 0, or -1 with a message if a value is not finite. */
+/* The ramp voltage at time t: V0 until t0, linear to V1 at t1, V1 afterwards. Pure. */
+double combdrive_ramp(double V0, double V1, double t0, double t1, double t);
+
+/* F, F_x, F_y, M at the current inputs and time (drive voltage V + ramp(time)). 0, or -1 with
+ * a message if a value is not finite. */
 int combdrive_outputs(combdrive_model_t *m, char *msg, size_t msg_size);
 
 #endif

@@ -388,6 +388,15 @@ int csfh_model_event_update(csfh_model_t *m)
     return 0;
 }
 
+void csfh_model_apply_initial_parameters(csfh_model_t *m)
+{
+    if (m->p.initial_from_parameters) {
+        for (int i = 0; i < 6; i++) {
+            m->x[i] = m->p.initial_state[i];
+        }
+    }
+}
+
 int csfh_model_check_start(const csfh_model_t *m, char *msg, size_t msg_size)
 {
     if (m->p.law == CSFH_CONTACTLAW_NONE) {

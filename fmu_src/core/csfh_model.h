@@ -49,6 +49,10 @@ typedef struct {
     double shock_duration;   /* s */
     double shock_start;      /* s */
     double shock_angle;      /* rad, direction of the frame's acceleration */
+    /* the start state as parameters (importers that set only parameters: libcosim's SSP
+     * loader); applied once, by csfh_model_apply_initial_parameters */
+    int initial_from_parameters;
+    double initial_state[6]; /* body1.x, y, theta, vx, vy, omega */
 } csfh_params_t;
 
 /* Quantities derived from the parameters (csfh_model_prepare). */
@@ -150,6 +154,10 @@ int *csfh_variable_int(csfh_model_t *m, const csfh_variable_t *v);
  * compute the derived quantities. Returns 0 on success, -1 with a message otherwise (the derived
  * quantities are then left unchanged). */
 int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size);
+
+/* End of initialization, before csfh_model_check_start: with initial.from_parameters the
+ * state x takes the initial.body1.* parameters (already checked by csfh_model_prepare). */
+void csfh_model_apply_initial_parameters(csfh_model_t *m);
 
 /* The start state must not be deeper in the bore than contact.max_initial_indentation (a start
  * far inside the clearance is a typo, and the contact law would answer it with an unphysical

@@ -19,6 +19,8 @@ static int prepare(void *m, char *msg, size_t msg_size)
 
 static int check_start(void *m, char *msg, size_t msg_size)
 {
+    /* called once, at fmi2ExitInitializationMode (the glue restores the model if refused) */
+    csfh_model_apply_initial_parameters((csfh_model_t *)m);
     return csfh_model_check_start((const csfh_model_t *)m, msg, msg_size);
 }
 

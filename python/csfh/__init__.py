@@ -9,6 +9,7 @@ the Moreau time stepper, comparisons and reports on top.
     >>> run = csfh.simulate(scene, "LN_cylinders")      # FMU, model exchange, CVode
     >>> rigid = csfh.moreau(scene, stick_rule="memory")  # Moreau midpoint stepper
     >>> driven = csfh.cosimulate(csfh.load_scene("combdrive"))  # with the comb-drive FMU
+    >>> system = csfh.ssp_path("combdrive")  # the same coupled system as an SSP 1.0 file
 
 The model itself is documented in ``docs/model.md``.
 
@@ -40,6 +41,7 @@ from ._version import __version__
 if TYPE_CHECKING:
     from .cosim.coupling import CosimError
     from .cosim.run import cosimulate
+    from .cosim.ssp import ssp_path, write_ssp
     from .errors import SceneError, SimulationError
     from .model.scene import IntegratorSettings, Scene, load_scene, scene_from_dict
     from .paths import batch_library_path, combdrive_fmu_path, core_library_path, fmu_path
@@ -69,6 +71,8 @@ _PUBLIC = {
     "moreau": "csfh.runners.moreau",
     "scene_from_dict": "csfh.model.scene",
     "simulate": "csfh.runners.simulate",
+    "ssp_path": "csfh.cosim.ssp",
+    "write_ssp": "csfh.cosim.ssp",
 }
 """Each public name and the module that defines it."""
 
@@ -93,6 +97,8 @@ __all__ = [
     "moreau",
     "scene_from_dict",
     "simulate",
+    "ssp_path",
+    "write_ssp",
 ]
 
 

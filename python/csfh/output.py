@@ -337,6 +337,11 @@ def check_set(directory: Path, name: str, files: list[str], command: str) -> Non
             )
 
 
+def write_bytes(path: Path, data: bytes) -> Path:
+    """A binary file (e.g. an SSP archive), written whole or not at all."""
+    return _write_bytes(path, data)
+
+
 def write_text(path: Path, text: str) -> Path:
     """A text file (UTF-8)."""
     return _write_bytes(path, text.encode("utf-8"))

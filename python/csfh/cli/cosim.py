@@ -18,6 +18,12 @@ def _cmd_cosim(args: argparse.Namespace) -> int:
     from ..output import output_set
 
     scene = load_scene(args.scene)
+    if args.export_ssp:
+        from ..cosim.ssp import write_ssp
+
+        path = write_ssp(scene, args.export_ssp, step=args.step, stop_time=args.stop_time)
+        print(f"{scene.name}: coupled system (csfh.fmu, combdrive.fmu) as SSP 1.0 -> {path}")
+        return 0
     out = out_dir(args, scene.name)
     tr = cosimulate(
         scene, engine=args.engine, step=args.step, stop_time=args.stop_time, quiet=args.quiet
@@ -46,7 +52,8 @@ def register(sub: Any) -> None:
         help="co-simulate the hinge with the comb-drive actuator ([cosim] section of a scene)",
         description="Co-simulation of the csfh FMU with the comb-drive actuator FMU: the "
         "coupling, voltage ramp and step come from the scene's [cosim] section (built-in "
-        "example: combdrive). Writes OUT/cosim_ENGINE.csv and OUT/cosim_ENGINE.png.",
+        "example: combdrive). Writes OUT/cosim_ENGINE.csv and OUT/cosim_ENGINE.png, or with "
+        "--export-ssp the coupled system as an SSP file that fmpy and libcosim read.",
     )
     p.add_argument("scene", help="built-in scene (combdrive) or a .toml file with [cosim]")
     p.add_argument(
@@ -66,6 +73,13 @@ def register(sub: Any) -> None:
         type=positive_float,
         metavar="T",
         help="end time in s (default: the scene's)",
+    )
+    p.add_argument(
+        "--export-ssp",
+        metavar="FILE",
+        help="write the coupled system as an SSP 1.0 archive (both FMUs, connections, "
+        "parameters, voltage ramp, step and stop time) to FILE instead of running it "
+        "(default: run it)",
     )
     add_quiet(p)
     p.set_defaults(func=_cmd_cosim)

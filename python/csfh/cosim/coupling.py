@@ -25,6 +25,11 @@ step (zero-order hold; the csfh FMU restarts CVODE when an input changes).
   algebraic loop to solve: theta is a state of the hinge (no direct feedthrough).
 
 The voltage is set by the master before each step (libcosim: an override manipulator), V(t_k).
+With ``voltage_in_fmu`` the master instead sets the scene's ramp as the actuator's parameters
+ramp.V0, ramp.V1, ramp.t0, ramp.t1 and leaves its input V at 0: the actuator then evaluates
+V(t) itself at its own time, so after the step to t_k+1 its force is that of V(t_k+1) (one step
+earlier than with the master's V(t_k)). This is how the SSP export carries the voltage
+(csfh.cosim.ssp), and both masters run it that way to compare with the SSP importers.
 """
 
 from __future__ import annotations
@@ -56,6 +61,23 @@ def csfh_start_values(scene: Scene) -> dict[str, Any]:
     values: dict[str, Any] = dict(scene.parameter_values(None))
     values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
     values.update(scene.inputs)
+    return values
+
+
+RAMP_PARAMETERS = {"V0": "ramp.V0", "V1": "ramp.V1", "t0": "ramp.t0", "t1": "ramp.t1"}
+"""Voltage ramp key of the scene -> the actuator FMU's parameter."""
+
+
+def actuator_start_values(s: CosimSettings, voltage_in_fmu: bool) -> dict[str, Any]:
+    """The actuator's parameters of the scene, and the voltage: the input V = V(0) (set again
+    by the master before each step), or with `voltage_in_fmu` the ramp as the FMU's ramp.*
+    parameters (the input V stays at its start value 0)."""
+    values: dict[str, Any] = dict(s.actuator)
+    if voltage_in_fmu:
+        ramp = s.voltage
+        values.update({RAMP_PARAMETERS[k]: float(getattr(ramp, k)) for k in RAMP_PARAMETERS})
+    else:
+        values["V"] = s.voltage(0.0)
     return values
 
 

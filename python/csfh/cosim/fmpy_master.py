@@ -19,6 +19,7 @@ from .coupling import (
     COLUMNS,
     CosimError,
     Rows,
+    actuator_start_values,
     csfh_start_values,
     make_trajectory,
 )
@@ -30,8 +31,15 @@ def run_fmpy(
     *,
     stop_time: float | None = None,
     progress: Progress | None = None,
+    voltage_in_fmu: bool = False,
+    initial_exchange: bool = True,
 ) -> Trajectory:
-    """Fixed-step master loop over fmpy's FMU2Slave (ordering from the settings)."""
+    """Fixed-step master loop over fmpy's FMU2Slave (ordering from the settings).
+
+    `voltage_in_fmu`: the actuator evaluates the voltage ramp itself (csfh.cosim.coupling).
+    `initial_exchange` (default, as libcosim): at initialization theta goes to the actuator and
+    its force to the hinge, so the force acts from t = 0; False: every connected input keeps its
+    start value 0 over the first step, as in fmpy's SSP master (fmpy.ssp.simulation)."""
     from fmpy.fmi1 import FMICallException
 
     s = settings
@@ -50,7 +58,7 @@ def run_fmpy(
         a.fmu.enterInitializationMode()
         c.set(csfh_start_values(scene))
         current = a
-        a.set({**s.actuator, "V": s.voltage(0.0)})
+        a.set(actuator_start_values(s, voltage_in_fmu))
         links = [(o, i) for o, i in CONNECTIONS if s.moment or o != "M"]
         out_vrs = [a.vr(o) for o, _ in links]
         in_vrs = [c.vr(i) for _, i in links]
@@ -64,9 +72,12 @@ def run_fmpy(
                 a.fmu.setReal([theta_a], c.fmu.getReal([theta_c]))
 
         # initial exchange (as libcosim's initialization): theta -> actuator, forces -> hinge
-        exchange_theta()
-        applied = a.fmu.getReal(act_vrs)
-        c.fmu.setReal(in_vrs, a.fmu.getReal(out_vrs))
+        if initial_exchange:
+            exchange_theta()
+            applied = a.fmu.getReal(act_vrs)
+            c.fmu.setReal(in_vrs, a.fmu.getReal(out_vrs))
+        else:
+            applied = [0.0] * len(act_vrs)
         current = c
         c.fmu.exitInitializationMode()
         current = a
@@ -78,7 +89,8 @@ def run_fmpy(
             t = k * h
             V = s.voltage(t)
             current = a
-            a.fmu.setReal([a.vr("V")], [V])
+            if not voltage_in_fmu:
+                a.fmu.setReal([a.vr("V")], [V])
             if s.ordering == "gauss-seidel":
                 exchange_theta()
                 applied = a.fmu.getReal(act_vrs)

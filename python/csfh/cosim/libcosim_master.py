@@ -15,7 +15,13 @@ from ..paths import combdrive_fmu_path, fmu_path
 from ..progress import Progress
 from ..runners.fmu import OUTPUT_NAMES
 from ..trajectory import Trajectory
-from .coupling import ACTUATOR_COLUMNS, CosimError, csfh_start_values, make_trajectory
+from .coupling import (
+    ACTUATOR_COLUMNS,
+    CosimError,
+    actuator_start_values,
+    csfh_start_values,
+    make_trajectory,
+)
 
 
 def _libcosim_samples(observer: Any, slave: int, vr: int, count: int, integer: bool) -> np.ndarray:
@@ -67,8 +73,11 @@ def run_libcosimpy(
     *,
     stop_time: float | None = None,
     progress: Progress | None = None,
+    voltage_in_fmu: bool = False,
 ) -> Trajectory:
-    """The same coupling in libcosim (fixed-step, Jacobi; step sizes in integer nanoseconds)."""
+    """The same coupling in libcosim (fixed-step, Jacobi; step sizes in integer nanoseconds).
+    `voltage_in_fmu`: the actuator evaluates the voltage ramp itself (csfh.cosim.coupling)
+    instead of an override manipulator setting V before each step."""
     try:
         from libcosimpy.CosimEnums import CosimVariableType
         from libcosimpy.CosimExecution import CosimExecution
@@ -125,14 +134,15 @@ def run_libcosimpy(
                 raise CosimError(f"libcosimpy: cannot set {name} = {value}: {_last_error()}")
 
     initial(ic, cv, description(csfh_path), csfh_start_values(scene))
-    initial(ia, av, description(act_path), {**s.actuator, "V": s.voltage(0.0)})
+    initial(ia, av, description(act_path), actuator_start_values(s, voltage_in_fmu))
     links = [(o, i) for o, i in CONNECTIONS if s.moment or o != "M"]
     for out, inp in links:
         ex.connect_real_variables(ia, av[out], ic, cv[inp])
     if s.moment:
         ex.connect_real_variables(ic, cv["body1.theta"], ia, av["theta"])
     override = CosimManipulator.create_override()
-    ex.add_manipulator(override)
+    if not voltage_in_fmu:
+        ex.add_manipulator(override)
     series = CosimObserver.create_time_series(buffer_size=n + 1)  # default: 10000 samples
     ex.add_observer(series)
     real = CosimVariableType.REAL
@@ -145,7 +155,8 @@ def run_libcosimpy(
     ex.add_observer(last)
 
     for k in range(n):
-        override.slave_real_values(ia, [av["V"]], [s.voltage(k * s.step)])
+        if not voltage_in_fmu:
+            override.slave_real_values(ia, [av["V"]], [s.voltage(k * s.step)])
         if not ex.step():
             raise CosimError(f"libcosimpy: step {k} (t = {k * s.step:g} s) failed: {_last_error()}")
         if progress is not None and k % 200 == 0:

@@ -41,6 +41,7 @@ def cosimulate(
     ordering: str | None = None,
     stop_time: float | None = None,
     quiet: bool = True,
+    voltage_in_fmu: bool = False,
 ) -> Trajectory:
     """Co-simulate the scene's hinge with its comb-drive actuator, as set up by the scene's
     ``[cosim]`` section (its keys: csfh.model.cosim_section), and return the
@@ -50,6 +51,9 @@ def cosimulate(
 
     `engine` (``"fmpy"`` or ``"libcosimpy"``), `step` (s) and `ordering` (``"jacobi"`` or
     ``"gauss-seidel"``, fmpy only) override the scene's settings, `stop_time` its stop time.
+    `voltage_in_fmu`: the actuator FMU evaluates the voltage ramp V(t) itself (its ramp.*
+    parameters), as in the scene's SSP export (csfh.cosim.ssp), instead of the master setting
+    its input V before each step.
     Raises :class:`SceneError` for bad settings and :class:`CosimError` when an FMU fails."""
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
@@ -67,7 +71,13 @@ def cosimulate(
         raise SceneError(f"{where}: {exc}") from None
     progress = Progress(f"{scene.name}: cosim {settings.engine}", quiet=quiet)
     try:
-        return RUNNERS[settings.engine](scene, settings, stop_time=stop_time, progress=progress)
+        return RUNNERS[settings.engine](
+            scene,
+            settings,
+            stop_time=stop_time,
+            progress=progress,
+            voltage_in_fmu=voltage_in_fmu,
+        )
     except CosimError as exc:
         raise with_source(exc, scene) from None
     finally:
