@@ -2,14 +2,23 @@
 #
 #   CSFH_FMU_PLATFORM                 linux64 | win64 | darwin64: the FMI 2.0 platform of this
 #                                     build's compiler (a cross build: cmake/platforms.cmake)
-#   csfh_add_fmu_binary(TARGET MODEL_IDENTIFIER id SOURCES ... [INCLUDE_DIRS ...] [LINK ...])
-#       the FMU's shared library for this platform, exporting only the fmi2* functions, into
-#       ${CMAKE_BINARY_DIR}/binaries/<id>/<platform>/
+#   CSFH_FMU3_PLATFORM                x86_64-linux | x86_64-windows | x86_64-darwin |
+#                                     aarch64-darwin: the FMI 3.0 platform tuple of this build
+#   csfh_add_fmu_binary(TARGET MODEL_IDENTIFIER id SOURCES ... [INCLUDE_DIRS ...] [LINK ...]
+#                       [FMI_VERSION 2|3])
+#       the FMU's shared library for this platform, exporting only the fmi2* (FMI 3.0: fmi3*)
+#       functions, into ${CMAKE_BINARY_DIR}/binaries/<id>/<platform>/ (FMI 3.0:
+#       ${CMAKE_BINARY_DIR}/binaries3/<id>/<platform tuple>/)
+#   csfh_add_fmu_objects(TARGET SOURCES ... [INCLUDE_DIRS ...] [LINK ...])
+#       the FMI-independent part of an FMU (model, instance, stepper) compiled once, as an object
+#       library that the FMI 2.0 and FMI 3.0 binaries both link (LINK TARGET), each with its own
+#       front-end (fmi2_glue.c, fmi3_glue.c)
 #   csfh_add_test_importer(TARGET SOURCES ... [LINK ...])
 #       a C importer (an executable that loads FMU binaries, portable between POSIX and Windows):
 #       built by the host build and by every cross build, so the same importer runs the FMU of
 #       each platform (win64: under wine, tests/python/test_platforms.py)
 #   csfh_add_fmu_package(NAME ...)   build/<NAME>.fmu, see below
+#   csfh_add_fmu3_package(NAME ...)  build/fmi3/<NAME>.fmu, the FMI 3.0 build, see below
 
 # the FMI 2.0 headers: fmpy's, or FMI_HEADERS_DIR
 if(NOT FMI_HEADERS_DIR)
@@ -23,9 +32,11 @@ if(NOT FMI_HEADERS_DIR)
                         "pip install fmpy, or pass -DFMI_HEADERS_DIR=<dir with fmi2Functions.h>")
   endif()
 endif()
-if(NOT EXISTS ${FMI_HEADERS_DIR}/fmi2Functions.h)
-  message(FATAL_ERROR "fmi2Functions.h not found in FMI_HEADERS_DIR=${FMI_HEADERS_DIR}")
-endif()
+foreach(_header fmi2Functions.h fmi3Functions.h)
+  if(NOT EXISTS ${FMI_HEADERS_DIR}/${_header})
+    message(FATAL_ERROR "${_header} not found in FMI_HEADERS_DIR=${FMI_HEADERS_DIR}")
+  endif()
+endforeach()
 message(STATUS "FMI 2.0 headers: ${FMI_HEADERS_DIR}")
 
 if(APPLE)
@@ -35,18 +46,33 @@ if(APPLE)
 endif()
 if(WIN32)
   set(CSFH_FMU_PLATFORM win64)
+  set(_fmu3_system windows)
 elseif(APPLE)
   set(CSFH_FMU_PLATFORM darwin64)
+  set(_fmu3_system darwin)
 else()
   set(CSFH_FMU_PLATFORM linux64)
+  set(_fmu3_system linux)
+endif()
+if(CMAKE_SYSTEM_PROCESSOR MATCHES "^(arm64|aarch64|ARM64)$")
+  set(CSFH_FMU3_PLATFORM aarch64-${_fmu3_system})
+else()
+  set(CSFH_FMU3_PLATFORM x86_64-${_fmu3_system})
 endif()
 
 function(csfh_add_fmu_binary target)
-  cmake_parse_arguments(ARG "" "MODEL_IDENTIFIER" "SOURCES;INCLUDE_DIRS;LINK" ${ARGN})
+  cmake_parse_arguments(ARG "" "MODEL_IDENTIFIER;FMI_VERSION" "SOURCES;INCLUDE_DIRS;LINK" ${ARGN})
   add_library(${target} MODULE ${ARG_SOURCES})
+  if(ARG_FMI_VERSION STREQUAL "3")
+    set(output_dir ${CMAKE_BINARY_DIR}/binaries3/${ARG_MODEL_IDENTIFIER}/${CSFH_FMU3_PLATFORM})
+    set(exports ${PROJECT_SOURCE_DIR}/fmu_src/fmi/exports3.map)
+  else()
+    set(output_dir ${CMAKE_BINARY_DIR}/binaries/${ARG_MODEL_IDENTIFIER}/${CSFH_FMU_PLATFORM})
+    set(exports ${PROJECT_SOURCE_DIR}/fmu_src/fmi/exports.map)
+  endif()
   set_target_properties(${target} PROPERTIES
     OUTPUT_NAME ${ARG_MODEL_IDENTIFIER} PREFIX ""
-    LIBRARY_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/binaries/${ARG_MODEL_IDENTIFIER}/${CSFH_FMU_PLATFORM})
+    LIBRARY_OUTPUT_DIRECTORY ${output_dir})
   target_include_directories(${target} PRIVATE ${FMI_HEADERS_DIR} ${ARG_INCLUDE_DIRS})
   target_compile_options(${target} PRIVATE ${CSFH_WARNINGS})
   target_link_libraries(${target} PRIVATE ${ARG_LINK})
@@ -66,11 +92,19 @@ function(csfh_add_fmu_binary target)
     # export only the fmi2* functions; keep the static SUNDIALS symbols inside
     target_link_libraries(${target} PRIVATE m)
     target_link_options(${target} PRIVATE
-      -Wl,--version-script=${PROJECT_SOURCE_DIR}/fmu_src/fmi/exports.map -Wl,--no-undefined)
+      -Wl,--version-script=${exports} -Wl,--no-undefined)
     if(CMAKE_C_COMPILER_ID STREQUAL "GNU")  # (zig's linker has no --exclude-libs; the version
       target_link_options(${target} PRIVATE -Wl,--exclude-libs,ALL)  # script suffices)
     endif()
   endif()
+endfunction()
+
+function(csfh_add_fmu_objects target)
+  cmake_parse_arguments(ARG "" "" "SOURCES;INCLUDE_DIRS;LINK" ${ARGN})
+  add_library(${target} OBJECT ${ARG_SOURCES})
+  target_include_directories(${target} PRIVATE ${ARG_INCLUDE_DIRS})
+  target_compile_options(${target} PRIVATE ${CSFH_WARNINGS})
+  target_link_libraries(${target} PRIVATE ${ARG_LINK})
 endfunction()
 
 function(csfh_add_test_importer target)
@@ -171,4 +205,53 @@ function(csfh_add_fmu_package name)
     COMMENT "Packaging ${name}.fmu (${CSFH_PLATFORMS_BUILT} platforms)"
     VERBATIM)
   add_custom_target(${name}_fmu_package ALL DEPENDS ${fmu})
+endfunction()
+
+# build/fmi3/<name>.fmu: the FMI 3.0 build of the same model (fmu_src/fmi/fmi3_glue.c over the same
+# instance, stepper and model), modelDescription.xml from the same variables file
+# (generate.py --fmi-version 3), the binaries of every platform built under
+# binaries/<platform tuple>/ (FMI 3.0's names; darwin: one directory per architecture) and the
+# documentation. A binary FMU: the sources are in the FMI 2.0 FMU.
+#   csfh_add_fmu3_package(name MODEL_IDENTIFIER id VARIABLES toml HOST_TARGET target)
+function(csfh_add_fmu3_package name)
+  cmake_parse_arguments(ARG "" "MODEL_IDENTIFIER;VARIABLES;HOST_TARGET" "" ${ARGN})
+  set(id ${ARG_MODEL_IDENTIFIER})
+  set(dir ${CMAKE_BINARY_DIR}/generated/package3/${name})
+  set(fmu ${CMAKE_BINARY_DIR}/fmi3/${name}.fmu)
+  get_filename_component(variables ${ARG_VARIABLES} ABSOLUTE BASE_DIR ${PROJECT_SOURCE_DIR})
+  add_custom_command(
+    OUTPUT ${dir}/modelDescription.xml ${dir}/index.html
+    COMMAND Python3::Interpreter ${PROJECT_SOURCE_DIR}/modelDescription/generate.py
+            --version ${PROJECT_VERSION} --fmi-version 3 ${variables} ${dir}
+            --epoch ${CSFH_SOURCE_DATE_EPOCH}
+    COMMAND Python3::Interpreter ${PROJECT_SOURCE_DIR}/modelDescription/document.py
+            --version ${PROJECT_VERSION} ${variables} ${dir}/index.html
+    DEPENDS ${variables} ${PROJECT_SOURCE_DIR}/modelDescription/generate.py
+            ${PROJECT_SOURCE_DIR}/modelDescription/document.py
+            ${PROJECT_SOURCE_DIR}/python/csfh/_version.py
+    COMMENT "Generating the FMI 3.0 modelDescription.xml and documentation of fmi3/${name}.fmu"
+    VERBATIM)
+  csfh_platform_binaries3(binaries ${id} $<TARGET_FILE:${ARG_HOST_TARGET}>)
+  set(binary_args)
+  set(binary_files)
+  foreach(b IN LISTS binaries)
+    list(APPEND binary_args --binary "${b}")
+    string(REGEX REPLACE "^[^=]*=" "" path "${b}")
+    list(APPEND binary_files ${path})
+  endforeach()
+  add_custom_command(
+    OUTPUT ${fmu}
+    COMMAND ${CMAKE_COMMAND} -E make_directory ${CMAKE_BINARY_DIR}/fmi3
+    COMMAND Python3::Interpreter ${PROJECT_SOURCE_DIR}/tools/fmu_package.py ${fmu}
+            ${binary_args}
+            --file "modelDescription.xml=${dir}/modelDescription.xml"
+            --file "documentation/index.html=${dir}/index.html"
+            --file "documentation/licenses/SUNDIALS-LICENSE.txt=${CSFH_SUNDIALS_SOURCE_DIR}/LICENSE"
+            --file "documentation/licenses/SUNDIALS-NOTICE.txt=${CSFH_SUNDIALS_SOURCE_DIR}/NOTICE"
+    DEPENDS ${ARG_HOST_TARGET} ${CSFH_PLATFORM_TARGETS} ${binary_files}
+            ${dir}/modelDescription.xml ${dir}/index.html
+            ${PROJECT_SOURCE_DIR}/tools/fmu_package.py
+    COMMENT "Packaging fmi3/${name}.fmu (FMI 3.0, ${CSFH_PLATFORMS_BUILT} platforms)"
+    VERBATIM)
+  add_custom_target(${name}_fmu3_package ALL DEPENDS ${fmu})
 endfunction()

@@ -26,7 +26,8 @@ enable_testing()
 # same glue with its own model and table
 set(_fuzz_sources_csfh ${CSFH_FMI_SOURCES} ${CSFH_CORE_SOURCES})
 set(_fuzz_sources_combdrive
-  fmu_src/fmi/fmi2_glue.c fmu_src/fmi/cosimulation.c fmu_src/fmi/rk45.c
+  fmu_src/fmi/fmi2_glue.c fmu_src/fmi/fmu_instance.c fmu_src/fmi/cosimulation.c
+  fmu_src/fmi/rk45.c
   fmu_src/combdrive/combdrive_model.c fmu_src/combdrive/combdrive_fmu_model.c
   fmu_src/core/csfh_vartable.c ${COMBDRIVE_GEN_DIR}/combdrive_variables.c)
 set(_fuzz_gen_csfh ${CSFH_GEN_DIR})
@@ -48,8 +49,23 @@ foreach(_fmu csfh combdrive)
   endforeach()
 endforeach()
 
+# the FMI 3.0 front-end (tests/fuzz/fuzz_fmi3.c): the same sources with fmi3_glue.c
+foreach(_fmu csfh combdrive)
+  set(_target fuzz_fmi3_${_fmu})
+  list(TRANSFORM _fuzz_sources_${_fmu} REPLACE "fmi2_glue\\.c$" "fmi3_glue.c" OUTPUT_VARIABLE _sources3)
+  add_executable(${_target} tests/fuzz/fuzz_fmi3.c ${_sources3})
+  add_dependencies(${_target} csfh_generate)
+  target_include_directories(${_target} PRIVATE ${FMI_HEADERS_DIR} fmu_src/fmi fmu_src/core
+                             fmu_src/combdrive ${_fuzz_gen_${_fmu}})
+  target_compile_options(${_target} PRIVATE ${CSFH_WARNINGS} ${CSFH_FUZZ_FLAGS})
+  target_compile_definitions(${_target} PRIVATE MAX_STEPS_PER_CALL=20000L)
+  target_link_options(${_target} PRIVATE ${CSFH_FUZZ_FLAGS})
+  target_link_libraries(${_target} PRIVATE ${CSFH_FUZZ_CVODE} m)
+endforeach()
+
 add_custom_target(csfh_fuzz)
-add_dependencies(csfh_fuzz fuzz_fmi_csfh fuzz_fmi_combdrive fmu_states_csfh fmu_states_combdrive)
+add_dependencies(csfh_fuzz fuzz_fmi_csfh fuzz_fmi_combdrive fmu_states_csfh fmu_states_combdrive
+                 fuzz_fmi3_csfh fuzz_fmi3_combdrive)
 
 # Fixed seeds, bounded: 2 x 320000 calls, about a minute for both FMUs on one core. Hangs are
 # failures (the driver's alarm per sequence, then ctest's timeout).
@@ -59,7 +75,11 @@ add_test(NAME fuzz_fmi_csfh
          COMMAND fuzz_fmi_csfh --seeds 1 32 --sequences 50 --calls 200 --huge 8)
 add_test(NAME fuzz_fmi_combdrive
          COMMAND fuzz_fmi_combdrive --seeds 1 32 --sequences 50 --calls 200 --huge 8)
+# FMI 3.0: fewer calls (the shared instance is covered above), about 10 s per FMU
+add_test(NAME fuzz_fmi3_csfh COMMAND fuzz_fmi3_csfh --seeds 1 8 --sequences 25 --calls 150)
+add_test(NAME fuzz_fmi3_combdrive COMMAND fuzz_fmi3_combdrive --seeds 1 8 --sequences 25 --calls 150)
 add_test(NAME fmu_states_csfh COMMAND fmu_states_csfh)
 add_test(NAME fmu_states_combdrive COMMAND fmu_states_combdrive)
-set_tests_properties(fuzz_fmi_csfh fuzz_fmi_combdrive fmu_states_csfh fmu_states_combdrive PROPERTIES
+set_tests_properties(fuzz_fmi_csfh fuzz_fmi_combdrive fuzz_fmi3_csfh fuzz_fmi3_combdrive
+                     fmu_states_csfh fmu_states_combdrive PROPERTIES
                      LABELS fuzz TIMEOUT 300 ENVIRONMENT "${_fuzz_env}")

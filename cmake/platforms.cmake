@@ -60,6 +60,19 @@ set(_csfh_slices
   "darwin64-arm64|darwin64|aarch64-macos|Darwin|arm64")
 set(CSFH_PLATFORM_TARGETS)
 
+# the FMI 3.0 platform tuple of a slice
+function(_csfh_fmu3_tuple out slice)
+  if(slice STREQUAL "linux64")
+    set(${out} x86_64-linux PARENT_SCOPE)
+  elseif(slice STREQUAL "win64")
+    set(${out} x86_64-windows PARENT_SCOPE)
+  elseif(slice STREQUAL "darwin64-x86_64")
+    set(${out} x86_64-darwin PARENT_SCOPE)
+  else()
+    set(${out} aarch64-darwin PARENT_SCOPE)
+  endif()
+endfunction()
+
 if(_platforms STREQUAL "all")
   include(ExternalProject)
   execute_process(COMMAND "${CSFH_ZIG}" version OUTPUT_VARIABLE _zig_version
@@ -94,6 +107,9 @@ if(_platforms STREQUAL "all")
     set(byproducts)
     foreach(id IN LISTS CSFH_FMU_MODEL_IDENTIFIERS)
       list(APPEND byproducts ${CMAKE_BINARY_DIR}/platforms/${slice}/binaries/${id}/${platform}/${id}${suffix})
+      # the FMI 3.0 binaries (fmu.cmake: binaries3/<id>/<platform tuple>/)
+      _csfh_fmu3_tuple(tuple ${slice})
+      list(APPEND byproducts ${CMAKE_BINARY_DIR}/platforms/${slice}/binaries3/${id}/${tuple}/${id}${suffix})
     endforeach()
     ExternalProject_Add(csfh_platform_${slice}
       SOURCE_DIR ${PROJECT_SOURCE_DIR}
@@ -128,5 +144,21 @@ function(csfh_platform_binaries out id host_file)
     "linux64=${p}/linux64/binaries/${id}/linux64/${id}.so"
     "win64=${p}/win64/binaries/${id}/win64/${id}.dll"
     "darwin64=${p}/darwin64-x86_64/binaries/${id}/darwin64/${id}.dylib,${p}/darwin64-arm64/binaries/${id}/darwin64/${id}.dylib"
+    PARENT_SCOPE)
+endfunction()
+
+# "tuple=file" for tools/fmu_package.py: the FMI 3.0 binaries of model `id` (one per platform
+# tuple; darwin: x86_64-darwin and aarch64-darwin, no universal binary)
+function(csfh_platform_binaries3 out id host_file)
+  if(CSFH_PLATFORMS_BUILT STREQUAL "host")
+    set(${out} "${CSFH_FMU3_PLATFORM}=${host_file}" PARENT_SCOPE)
+    return()
+  endif()
+  set(p ${CMAKE_BINARY_DIR}/platforms)
+  set(${out}
+    "x86_64-linux=${p}/linux64/binaries3/${id}/x86_64-linux/${id}.so"
+    "x86_64-windows=${p}/win64/binaries3/${id}/x86_64-windows/${id}.dll"
+    "x86_64-darwin=${p}/darwin64-x86_64/binaries3/${id}/x86_64-darwin/${id}.dylib"
+    "aarch64-darwin=${p}/darwin64-arm64/binaries3/${id}/aarch64-darwin/${id}.dylib"
     PARENT_SCOPE)
 endfunction()

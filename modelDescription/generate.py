@@ -9,6 +9,13 @@ types, start values, ranges, units and the C storage of every variable. This scr
     <outdir>/csfh_variables.c    (the table the FMI glue and the core library use)
     <outdir>/csfh_enums.h        (the enumerations as C enums)
 
+With --fmi-version 3 the model description is FMI 3.0's (the same variables, value references,
+start values, ranges and instantiation token; the C files are the same): the FMI 3.0 build of
+the FMU (fmu_src/fmi/fmi3_glue.c) packages it. The FMI 3.0 co-simulation capabilities are the
+[cosimulation] table's (translated) plus [fmi3_cosimulation]; the model-exchange event
+indicators are the variables named by [model] event_indicator_variables (FMI 3.0 declares each
+event indicator as a variable).
+
 The same script serves every model of the repository (combdrive.toml: the comb-drive actuator).
 Optional keys of [model] name the C side; their defaults are the csfh model's:
 
@@ -21,7 +28,8 @@ Optional keys of [model] name the C side; their defaults are the csfh model's:
 The model's `version` is the package's (python/csfh/_version.py, the one place of the version;
 CMake passes it as --version).
 
-Usage: generate.py [--version X.Y.Z] VARIABLES_TOML OUTDIR [--source-files NAME ...]
+Usage: generate.py [--version X.Y.Z] [--fmi-version 2|3] VARIABLES_TOML OUTDIR
+                   [--source-files NAME ...]
 """
 
 from __future__ import annotations
@@ -377,6 +385,247 @@ def xml_model_description(
 
 
 # --------------------------------------------------------------------------------------------
+# modelDescription.xml, FMI 3.0
+
+FMI3_TYPE = {
+    "Real": "Float64",
+    "Integer": "Int32",
+    "Boolean": "Boolean",
+    "Enumeration": "Enumeration",
+}
+# [cosimulation] keys of FMI 2.0 and their FMI 3.0 names (None: not in FMI 3.0)
+FMI3_CS_ATTRIBUTES = {
+    "canHandleVariableCommunicationStepSize": "canHandleVariableCommunicationStepSize",
+    "canInterpolateInputs": None,  # FMI 3.0: recommendedIntermediateInputSmoothness
+    "maxOutputDerivativeOrder": "maxOutputDerivativeOrder",
+    "canRunAsynchronuously": None,
+    "canBeInstantiatedOnlyOncePerProcess": "canBeInstantiatedOnlyOncePerProcess",
+    "canNotUseMemoryManagementFunctions": None,
+    "canGetAndSetFMUstate": "canGetAndSetFMUState",
+    "canSerializeFMUstate": "canSerializeFMUState",
+    "providesDirectionalDerivative": "providesDirectionalDerivatives",
+}
+# what the FMI 3.0 front-end adds to co-simulation (fmu_src/fmi/fmi3_glue.c): Event Mode, and
+# fmi3DoStep returning early at an event when the importer allows it
+FMI3_CS_DEFAULT = {
+    "hasEventMode": True,
+    "mightReturnEarlyFromDoStep": True,
+    "canReturnEarlyAfterIntermediateUpdate": False,
+    "providesIntermediateUpdate": False,
+}
+
+
+def fmi3_attr(value: object) -> str:
+    return str(value).lower() if isinstance(value, bool) else str(value)
+
+
+def xml_model_description_fmi3(
+    spec: dict, guid: str, epoch: int, source_files: tuple[str, ...] = ()
+) -> str:
+    """The FMI 3.0 model description of the same interface: value references as in FMI 2.0
+    (unique over all types), Real -> Float64, Integer -> Int32; ModelStructure by value
+    reference; the instantiation token is the FMI 2.0 GUID."""
+    model = spec["model"]
+    variables = spec["variables"]
+    units = {u["name"]: u for u in spec.get("units", [])}
+    by_name = {v["name"]: v for v in variables}
+    generated = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(epoch))
+    states = [v["name"] for v in variables if v.get("state")]
+    inputs = [v["name"] for v in variables if v["causality"] == "input"]
+    parameters = [v["name"] for v in variables if v["causality"] == "parameter"]
+    indicators = list(model.get("event_indicator_variables", []))
+    if len(indicators) != model["numberOfEventIndicators"]:
+        raise SpecError(
+            f"[model] event_indicator_variables names {len(indicators)} variables, "
+            f"numberOfEventIndicators is {model['numberOfEventIndicators']}"
+        )
+    for name in indicators:
+        if name not in by_name or by_name[name]["type"] != "Real":
+            raise SpecError(f"event indicator {name!r} is not a Real variable")
+    out: list[str] = []
+    w = out.append
+    w('<?xml version="1.0" encoding="UTF-8"?>')
+    w(
+        f'<fmiModelDescription fmiVersion="3.0" modelName={quoteattr(model["modelName"])} '
+        f'instantiationToken="{guid}" description={quoteattr(model["description"])} '
+        f"author={quoteattr(model['author'])} version={quoteattr(model['version'])} "
+        f'generationTool="csfh modelDescription/generate.py" '
+        f'generationDateAndTime="{generated}" '
+        f'variableNamingConvention="structured">'
+    )
+    mi = model["modelIdentifier"]
+
+    def interface(tag: str, attrs: str) -> None:
+        if not source_files:
+            w(f"  <{tag} {attrs}/>")
+            return
+        # FMI 3.0 describes sources in sources/buildDescription.xml; the file list stays there
+        w(f"  <{tag} {attrs}/>")
+
+    interface(
+        "ModelExchange",
+        f'modelIdentifier="{mi}" canGetAndSetFMUState="true" canSerializeFMUState="true" '
+        f'needsCompletedIntegratorStep="false"',
+    )
+    if "cosimulation" in spec:
+        cs: dict[str, object] = {}
+        for key, value in spec["cosimulation"].items():
+            if key not in FMI3_CS_ATTRIBUTES:
+                raise SpecError(f"[cosimulation] {key}: no FMI 3.0 equivalent known")
+            if FMI3_CS_ATTRIBUTES[key] is not None:
+                cs[FMI3_CS_ATTRIBUTES[key]] = value
+        cs.update(FMI3_CS_DEFAULT)
+        cs.update(spec.get("fmi3_cosimulation", {}))
+        attrs = " ".join(f'{k}="{fmi3_attr(v)}"' for k, v in cs.items())
+        interface("CoSimulation", f'modelIdentifier="{mi}" {attrs}')
+    w("  <UnitDefinitions>")
+    for u in spec["units"]:
+        base = {k: u[k] for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad") if k in u}
+        displays = u.get("display", [])
+        if not base and not displays:
+            w(f"    <Unit name={quoteattr(u['name'])}/>")
+            continue
+        w(f"    <Unit name={quoteattr(u['name'])}>")
+        if base or u["name"] == "1":
+            w("      <BaseUnit " + " ".join(f'{k}="{val}"' for k, val in base.items()) + "/>")
+        for d in displays:
+            w(f'      <DisplayUnit name={quoteattr(d["name"])} factor="{d["factor"]!r}"/>')
+        w("    </Unit>")
+    w("  </UnitDefinitions>")
+    if spec.get("enumerations"):
+        w("  <TypeDefinitions>")
+        for e in spec["enumerations"]:
+            w(
+                f"    <EnumerationType name={quoteattr(e['name'])} "
+                f"description={quoteattr(e['description'])}>"
+            )
+            for it in e["items"]:
+                w(
+                    f'      <Item name={quoteattr(it["name"])} value="{it["value"]}" '
+                    f"description={quoteattr(it['description'])}/>"
+                )
+            w("    </EnumerationType>")
+        w("  </TypeDefinitions>")
+    w("  <LogCategories>")
+    events = model.get("log_events_description", LOG_EVENTS_DEFAULT)
+    w(f'    <Category name="logEvents" description={quoteattr(events)}/>')
+    w('    <Category name="logStatusWarning" description="Calls that return fmi3Warning"/>')
+    w(
+        '    <Category name="logStatusError" '
+        'description="Calls that return fmi3Error: bad input, illegal call sequences"/>'
+    )
+    w('    <Category name="logAll" description="Every FMI call"/>')
+    w("  </LogCategories>")
+    experiment = spec.get("default_experiment", DEFAULT_EXPERIMENT)
+    w(
+        "  <DefaultExperiment "
+        + " ".join(
+            f'{key}="{fmt_xml_real(experiment[key])}"'
+            for key in ("startTime", "stopTime", "tolerance", "stepSize")
+            if key in experiment
+        )
+        + "/>"
+    )
+    w("  <ModelVariables>")
+    for v in variables:
+        attrs = [f"name={quoteattr(v['name'])}", f'valueReference="{v["vr"]}"']
+        if "description" in v:
+            attrs.append(f"description={quoteattr(v['description'])}")
+        attrs.append(f'causality="{v["causality"]}"')
+        attrs.append(f'variability="{v["variability"]}"')
+        if "initial" in v:
+            attrs.append(f'initial="{v["initial"]}"')
+        if v["type"] == "Enumeration":
+            attrs.append(f'declaredType="{v["declaredType"]}"')
+        quantity = v.get("quantity", units.get(v.get("unit", ""), {}).get("quantity"))
+        if quantity and v["type"] == "Real":
+            attrs.append(f"quantity={quoteattr(quantity)}")
+        for key in ("unit", "displayUnit"):
+            if key in v:
+                attrs.append(f"{key}={quoteattr(v[key])}")
+        if "range" in v:
+            lo, hi, lo_open, hi_open = parse_range(v["range"])
+            if v["type"] == "Integer":
+                bounds = (lo + 1 if lo_open else lo, hi - 1 if hi_open else hi)
+                fmt_bound = lambda x: str(int(x))  # noqa: E731
+            else:
+                bounds = (
+                    math.nextafter(lo, math.inf) if lo_open and math.isfinite(lo) else lo,
+                    math.nextafter(hi, -math.inf) if hi_open and math.isfinite(hi) else hi,
+                )
+                fmt_bound = fmt_xml_real
+            if math.isfinite(bounds[0]):
+                attrs.append(f'min="{fmt_bound(bounds[0])}"')
+            if math.isfinite(bounds[1]):
+                attrs.append(f'max="{fmt_bound(bounds[1])}"')
+        if "nominal" in v:
+            attrs.append(f'nominal="{fmt_xml_real(v["nominal"])}"')
+        if "derivative_of" in v:
+            attrs.append(f'derivative="{by_name[v["derivative_of"]]["vr"]}"')
+        if "start" in v:
+            s = v["start"]
+            if v["type"] == "Boolean":
+                attrs.append(f'start="{"true" if s else "false"}"')
+            elif v["type"] == "Real":
+                attrs.append(f'start="{fmt_xml_real(s)}"')
+            else:
+                attrs.append(f'start="{int(s)}"')
+        w(f"    <{FMI3_TYPE[v['type']]} " + " ".join(attrs) + "/>")
+    w("  </ModelVariables>")
+
+    def deps_of(v: dict) -> list[str]:
+        d = v.get("depends", STATES_DEFAULT)
+        return states if d == STATES_DEFAULT else list(d)
+
+    def dep_attr(names: list[str]) -> str:
+        vrs = sorted({by_name[n]["vr"] for n in names})
+        return " ".join(str(r) for r in vrs)
+
+    def unknown(tag: str, v: dict, names: list[str] | None) -> None:
+        deps = "" if names is None else f' dependencies="{dep_attr(names)}"'
+        w(f'    <{tag} valueReference="{v["vr"]}"{deps}/>')
+
+    w("  <ModelStructure>")
+    for v in variables:
+        if v["causality"] == "output":
+            unknown("Output", v, deps_of(v))
+    for v in variables:
+        if "derivative_of" in v:
+            unknown("ContinuousStateDerivative", v, deps_of(v))
+    for v in variables:
+        calculated_output = (
+            v["causality"] == "output"
+            and v.get("initial") in (None, "calculated")
+            and "start" not in v
+        )
+        if not (
+            calculated_output or v["causality"] == "calculatedParameter" or "derivative_of" in v
+        ):
+            continue
+        if v["causality"] == "calculatedParameter":
+            names = parameters
+        elif (
+            "derivative_of" in v
+            and v.get("depends")
+            and all(n in states for n in v["depends"])
+            and len(v["depends"]) == 1
+        ):
+            names = deps_of(v)
+        else:
+            names = (
+                [n for n in deps_of(v) if n not in inputs]
+                + parameters
+                + [n for n in deps_of(v) if n in inputs]
+            )
+        unknown("InitialUnknown", v, names)
+    for name in indicators:
+        unknown("EventIndicator", by_name[name], deps_of(by_name[name]))
+    w("  </ModelStructure>")
+    w("</fmiModelDescription>")
+    return "\n".join(out) + "\n"
+
+
+# --------------------------------------------------------------------------------------------
 # C
 
 
@@ -491,6 +740,13 @@ def main(argv: list[str]) -> int:
         help="generationDateAndTime in seconds since 1970 (default: $SOURCE_DATE_EPOCH, else now)",
     )
     ap.add_argument(
+        "--fmi-version",
+        type=int,
+        choices=(2, 3),
+        default=2,
+        help="the FMI version of modelDescription.xml (the C files are the same)",
+    )
+    ap.add_argument(
         "--source-files",
         nargs="+",
         default=[],
@@ -511,10 +767,14 @@ def main(argv: list[str]) -> int:
     args.outdir.mkdir(parents=True, exist_ok=True)
     prefix = c_names(spec)[0]
     source = args.variables.name
+    writer = xml_model_description_fmi3 if args.fmi_version == 3 else xml_model_description
+    try:
+        description = writer(spec, guid, epoch, tuple(args.source_files))
+    except SpecError as exc:
+        print(f"generate.py: {args.variables}: {exc}", file=sys.stderr)
+        return 1
     files = {
-        "modelDescription.xml": xml_model_description(
-            spec, guid, epoch, tuple(args.source_files)
-        ),
+        "modelDescription.xml": description,
         f"{prefix}_variables.h": c_header(spec, guid, source),
         f"{prefix}_enums.h": c_enums(spec, source),
         f"{prefix}_variables.c": c_source(spec, source),

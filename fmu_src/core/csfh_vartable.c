@@ -31,8 +31,9 @@ int csfh_check_value(const csfh_variable_t *v, double value, char *msg, size_t m
     const int above = v->hi_open ? !(value < v->hi) : !(value <= v->hi);
     if (below || above) {
         if (v->type == CSFH_TYPE_ENUMERATION) {
-            snprintf(msg, msg_size, "%s = %d is not a valid enumeration value (%g..%g)", v->name,
-                     (int)value, v->lo, v->hi);
+            /* %.0f: an FMI 3.0 Int64 value may be far outside an int */
+            snprintf(msg, msg_size, "%s = %.0f is not a valid enumeration value (%g..%g)",
+                     v->name, value, v->lo, v->hi);
         } else if (v->type == CSFH_TYPE_BOOLEAN) {
             snprintf(msg, msg_size, "%s = %d is not a Boolean (0 or 1)", v->name, (int)value);
         } else {

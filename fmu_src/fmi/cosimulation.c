@@ -30,7 +30,7 @@
  * (FMU_DEFAULT_TOLERANCE = 1e-6 when none is given), absolute = relative x the nominal value of
  * each state.
  *
- * A failure of the integrator returns fmi2Error with its own message and return flag in the
+ * A failure of the integrator returns FMU_ERROR with its own message and return flag in the
  * log; the instance then holds the last state it reached successfully, at that time (also
  * reported by fmi2GetRealStatus(fmi2LastSuccessfulTime)); fmi2SetFMUstate can roll it back.
  *
@@ -42,15 +42,17 @@
  * time could not resolve its steps (ulp(1e10) = 1.9e-6 s) and drifted. A communication point
  * maps to tau exactly (t_end - origin, both multiples of ulp(origin) near the origin). CVODE's
  * own warnings (e.g. "t + h = t" after a very long run) make fmi2DoStep return fmi2Warning;
- * fmi2DoStep itself (fmi2_glue.c) reports steps that the double time cannot resolve.
+ * fmi2DoStep itself (fmu_instance.c: fmu_check_step) reports steps that the double time cannot
+ * resolve.
  *
  * Work per step and per communication point: the outputs are not computed at the end of a step
  * but when they are read (fmi2GetReal, fmu_update_outputs), the event message is formatted only
  * when logEvents is on, and the peak outputs cost nothing outside the contact mode.
  *
- * FMI types: rk45.c and auto_decide use none; the solver_* wrappers, the peak analysis and
- * cs_do_step use the instance (fmu_instance.h: the model, the log, the integrator) and
- * fmi2Status only as their result, so an FMI 3.0 glue can keep them by mapping the status.
+ * FMI types: none. The solver_* wrappers, the peak analysis and cs_do_step use only the instance
+ * (fmu_instance.h: the model, the log, the integrator, its own status type): the FMI 2.0 and
+ * FMI 3.0 front-ends (fmi2_glue.c, fmi3_glue.c) call the same cs_do_step; FMI 3.0's early
+ * return is its stop_at_event option (the step ends at the first contact onset or release).
  *
  * A model without continuous states (the comb-drive actuator) just advances its time. */
 #include <float.h>
@@ -196,8 +198,8 @@ static int check_indicators(fmu_instance_t *inst, const double *gout)
 {
     for (int i = 0; i < fmu_model.n_event_indicators; i++) {
         if (!isfinite(gout[i])) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
-                    "fmi2DoStep: non-finite event indicator z[%d] = %g", i, gout[i]);
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: non-finite event indicator z[%d] = %g",
+                    inst->step_function, i, gout[i]);
             return 1; /* the integrator fails the step */
         }
     }
@@ -233,12 +235,12 @@ static void error_handler(int error_code, const char *module, const char *functi
 {
     fmu_instance_t *inst = (fmu_instance_t *)user_data;
     if (error_code < 0) {
-        fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "%s %s: %s", module, function, msg);
+        fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s %s: %s", module, function, msg);
     } else {
         if (inst->cvode != NULL) {
-            inst->cvode->warnings++; /* fmi2DoStep returns fmi2Warning */
+            inst->cvode->warnings++; /* the step returns a warning */
         }
-        fmu_log(inst, fmi2Warning, LOG_STATUS_WARNING, "%s %s (local time from t0 = %.17g): %s",
+        fmu_log(inst, FMU_WARNING, LOG_STATUS_WARNING, "%s %s (local time from t0 = %.17g): %s",
                 module, function, inst->cvode != NULL ? inst->cvode->origin : 0.0, msg);
     }
 }
@@ -279,29 +281,31 @@ void cs_free(fmu_instance_t *inst)
     inst->cvode = NULL;
 }
 
-static fmi2Status cv_check(fmu_instance_t *inst, int flag, const char *call)
+static fmu_status_t cv_check(fmu_instance_t *inst, int flag, const char *call)
 {
     if (flag >= 0) {
-        return fmi2OK;
+        return FMU_OK;
     }
     char *name = CVodeGetReturnFlagName(flag);
-    fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: %s failed with %s at t = %.17g", call,
+    fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: %s failed with %s at t = %.17g",
+            inst->step_function, call,
             name != NULL ? name : "an unknown flag", *fmu_time(inst));
     free(name);
-    return fmi2Error;
+    return FMU_ERROR;
 }
 
-static fmi2Status rk_check(fmu_instance_t *inst, int flag, const char *call)
+static fmu_status_t rk_check(fmu_instance_t *inst, int flag, const char *call)
 {
     if (flag >= 0) {
-        return fmi2OK;
+        return FMU_OK;
     }
     /* RK45's own message (what failed, with its values), then the flag, as for CVODE */
-    fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "RK45 %s: %s", call,
+    fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "RK45 %s: %s", call,
             inst->cvode->rk != NULL ? rk45_message(inst->cvode->rk) : "out of memory");
-    fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: %s failed with %s at t = %.17g", call,
+    fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: %s failed with %s at t = %.17g",
+            inst->step_function, call,
             rk45_flag_name(flag), *fmu_time(inst));
-    return fmi2Error;
+    return FMU_ERROR;
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -373,7 +377,7 @@ static void solver_started(csfh_cvode_t *cv)
  * h_first if > 0 (else its estimate). CVODE's memory is created when missing or made with the
  * other CVODE method, else re-initialised; the vectors, the matrix and the solvers are kept from
  * one method to the next. */
-static fmi2Status solver_start(fmu_instance_t *inst, int method, double tau, double h_first)
+static fmu_status_t solver_start(fmu_instance_t *inst, int method, double tau, double h_first)
 {
     csfh_cvode_t *cv = inst->cvode;
     cv->method = method;
@@ -409,23 +413,24 @@ static fmi2Status solver_start(fmu_instance_t *inst, int method, double tau, dou
         cv->LS = cv->J != NULL ? SUNLinSol_Dense(cv->y, cv->J, cv->ctx) : NULL;
     }
     if (cv->mem == NULL || (method == FMU_CS_ADAMS ? cv->NLS == NULL : cv->LS == NULL)) {
-        fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate CVODE");
-        return fmi2Error;
+        fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: cannot allocate CVODE",
+                inst->step_function);
+        return FMU_ERROR;
     }
     cv->mem_method = method;
     solver_started(cv);
-    fmi2Status s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
-    if (s == fmi2OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, tau, cv->y), "CVodeInit");
-    if (s == fmi2OK) s = cv_check(inst, CVodeSetUserData(cv->mem, inst), "CVodeSetUserData");
-    if (s == fmi2OK) s = cv_check(inst, CVodeSVtolerances(cv->mem, inst->tolerance, cv->abstol), "CVodeSVtolerances");
-    if (s == fmi2OK && method == FMU_CS_ADAMS) {
+    fmu_status_t s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
+    if (s == FMU_OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, tau, cv->y), "CVodeInit");
+    if (s == FMU_OK) s = cv_check(inst, CVodeSetUserData(cv->mem, inst), "CVodeSetUserData");
+    if (s == FMU_OK) s = cv_check(inst, CVodeSVtolerances(cv->mem, inst->tolerance, cv->abstol), "CVodeSVtolerances");
+    if (s == FMU_OK && method == FMU_CS_ADAMS) {
         s = cv_check(inst, CVodeSetNonlinearSolver(cv->mem, cv->NLS), "CVodeSetNonlinearSolver");
-    } else if (s == fmi2OK) {
+    } else if (s == FMU_OK) {
         s = cv_check(inst, CVodeSetLinearSolver(cv->mem, cv->LS, cv->J), "CVodeSetLinearSolver");
     }
-    if (s == fmi2OK) s = cv_check(inst, CVodeRootInit(cv->mem, fmu_model.n_event_indicators, roots), "CVodeRootInit");
-    if (s == fmi2OK) s = cv_check(inst, CVodeSetNoInactiveRootWarn(cv->mem), "CVodeSetNoInactiveRootWarn");
-    if (s != fmi2OK) {
+    if (s == FMU_OK) s = cv_check(inst, CVodeRootInit(cv->mem, fmu_model.n_event_indicators, roots), "CVodeRootInit");
+    if (s == FMU_OK) s = cv_check(inst, CVodeSetNoInactiveRootWarn(cv->mem), "CVodeSetNoInactiveRootWarn");
+    if (s != FMU_OK) {
         CVodeFree(&cv->mem); /* half set up: never reused */
     }
     return s;
@@ -457,7 +462,7 @@ static int solver_step(fmu_instance_t *inst, double *tret)
 }
 
 /* The next stop time (local; > the integrator's current time): no step goes beyond it. */
-static fmi2Status solver_set_stop_time(fmu_instance_t *inst, double tau_stop)
+static fmu_status_t solver_set_stop_time(fmu_instance_t *inst, double tau_stop)
 {
     csfh_cvode_t *cv = inst->cvode;
     if (cv->method == FMU_CS_RK45) {
@@ -580,7 +585,7 @@ static int configured_method(const fmu_instance_t *inst)
     return fmu_model.cs_method != NULL ? fmu_model.cs_method(inst->model) : FMU_CS_BDF;
 }
 
-static fmi2Status cs_start(fmu_instance_t *inst)
+static fmu_status_t cs_start(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
     if (cv != NULL && cv->tolerance != inst->tolerance) {
@@ -592,23 +597,25 @@ static fmi2Status cs_start(fmu_instance_t *inst)
     if (cv == NULL) {
         cv = (csfh_cvode_t *)calloc(1, sizeof(*cv));
         if (cv == NULL) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: out of memory");
-            return fmi2Error;
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: out of memory", inst->step_function);
+            return FMU_ERROR;
         }
         inst->cvode = cv;
         cv->tolerance = inst->tolerance;
         if (SUNContext_Create(NULL, &cv->ctx) != 0) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: SUNContext_Create failed");
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: SUNContext_Create failed",
+                    inst->step_function);
             cs_free(inst);
-            return fmi2Error;
+            return FMU_ERROR;
         }
         cv->y = N_VNew_Serial(NX, cv->ctx);
         cv->abstol = N_VNew_Serial(NX, cv->ctx);
         cv->y_root = N_VNew_Serial(NX, cv->ctx);
         if (cv->y == NULL || cv->abstol == NULL || cv->y_root == NULL) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR, "fmi2DoStep: cannot allocate the integrator");
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: cannot allocate the integrator",
+                    inst->step_function);
             cs_free(inst);
-            return fmi2Error;
+            return FMU_ERROR;
         }
         /* absolute tolerance: relative tolerance times the nominal value of each state */
         double *atol = N_VGetArrayPointer(cv->abstol);
@@ -623,8 +630,8 @@ static fmi2Status cs_start(fmu_instance_t *inst)
     cv->origin = *fmu_time(inst);
     memset(cv->event_h, 0, sizeof(cv->event_h)); /* a start from outside: no memory of events */
     cv->hint_code = 0;
-    const fmi2Status s = solver_start(inst, method, 0.0, 0.0);
-    if (s != fmi2OK) {
+    const fmu_status_t s = solver_start(inst, method, 0.0, 0.0);
+    if (s != FMU_OK) {
         cs_free(inst);
         return s;
     }
@@ -1132,7 +1139,7 @@ static void take_solution(fmu_instance_t *inst, double tret)
 /* The step ends at t_end. The outputs are left to be computed when they are read
  * (fmu_update_outputs: fmi2GetReal, or the next step's peaks), so that a master that reads only
  * states pays nothing for them. */
-static fmi2Status finish_step(fmu_instance_t *inst, double t_end, fmi2Status status)
+static fmu_status_t finish_step(fmu_instance_t *inst, double t_end, fmu_status_t status)
 {
     *fmu_time(inst) = t_end; /* exact communication point (tret == t_end up to round-off) */
     fmu_invalidate(inst);
@@ -1145,7 +1152,7 @@ static fmi2Status finish_step(fmu_instance_t *inst, double t_end, fmi2Status sta
  * step straddles it; it returns STEP_TSTOP there, and cs_do_step restarts it as at a state
  * event. Without time events nothing here is called. */
 
-static fmi2Status set_time_event_stop(fmu_instance_t *inst)
+static fmu_status_t set_time_event_stop(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
     const double tn = solver_time(cv);
@@ -1153,14 +1160,14 @@ static fmi2Status set_time_event_stop(fmu_instance_t *inst)
     for (int i = 0; i < 8; i++) { /* events that round to CVODE's current time are behind it */
         const double te = fmu_model.next_time_event(inst->model, after);
         if (!isfinite(te)) {
-            return fmi2OK;
+            return FMU_OK;
         }
         if (te - cv->origin > tn) {
             return solver_set_stop_time(inst, te - cv->origin);
         }
         after = te;
     }
-    return fmi2OK;
+    return FMU_OK;
 }
 
 /* auto's decision at the local time t (logged when it changes something): the method for what
@@ -1170,20 +1177,23 @@ static int auto_next_method(fmu_instance_t *inst, double t)
     char why[256];
     const int method = auto_choose(inst->cvode, t, why, sizeof(why));
     if (why[0] != '\0') {
-        fmu_log(inst, fmi2OK, LOG_EVENTS, "%s", why);
+        fmu_log(inst, FMU_OK, LOG_EVENTS, "%s", why);
     }
     return method;
 }
 
-fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
+fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs, int stop_at_event, int *stopped)
 {
     const double now_abs = *fmu_time(inst);
+    if (stopped != NULL) {
+        *stopped = 0;
+    }
     if (NX == 0) {
-        return finish_step(inst, t_end_abs, fmi2OK); /* no continuous states: nothing to integrate */
+        return finish_step(inst, t_end_abs, FMU_OK); /* no continuous states: nothing to integrate */
     }
     if (inst->cvode == NULL || inst->cvode_needs_reinit) {
-        if (cs_start(inst) != fmi2OK) {
-            return fmi2Error;
+        if (cs_start(inst) != FMU_OK) {
+            return FMU_ERROR;
         }
         inst->cvode_needs_reinit = 0;
         peaks_forget(inst->cvode); /* a new interpolant */
@@ -1220,15 +1230,15 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             /* the last step (and the root check) already reaches past t_end */
             flag = solver_dense(cv, t_end, 0, cv->y) < 0 ? STEP_FAILED : STEP_OK;
             if (flag == STEP_FAILED) {
-                fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
-                        "fmi2DoStep: the interpolant of %s does not reach t = %.17g",
+                fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR,
+                        "%s: the interpolant of %s does not reach t = %.17g", inst->step_function,
                         method_name(cv->method), t_end_abs);
             }
             tret = t_end;
         } else {
-            if (fmu_model.next_time_event != NULL && set_time_event_stop(inst) != fmi2OK) {
+            if (fmu_model.next_time_event != NULL && set_time_event_stop(inst) != FMU_OK) {
                 inst->cvode_needs_reinit = 1;
-                return fmi2Error;
+                return FMU_ERROR;
             }
             flag = solver_step(inst, &tret);
             if (flag == STEP_OK && automatic && tret >= t_end) {
@@ -1271,12 +1281,12 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             if (finite) {
                 take_solution(inst, tret);
             }
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
-                    "fmi2DoStep: the step from t = %.17g to %.17g failed; the FMU holds the last "
-                    "successful state, at t = %.17g",
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR,
+                    "%s: the step from t = %.17g to %.17g failed; the FMU holds the last "
+                    "successful state, at t = %.17g", inst->step_function,
                     now_abs, t_end_abs, *fmu_time(inst));
             inst->cvode_needs_reinit = 1;
-            return fmi2Error;
+            return FMU_ERROR;
         }
         track_peaks(inst, tret_before, tret, stepped);
         take_solution(inst, tret);
@@ -1284,22 +1294,22 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             break;
         }
         if (steps > MAX_STEPS_PER_CALL) {
-            fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
-                    "fmi2DoStep: more than %ld %s steps in the step from t = %.17g to %.17g; "
-                    "the FMU holds the state at t = %.17g",
+            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR,
+                    "%s: more than %ld %s steps in the step from t = %.17g to %.17g; "
+                    "the FMU holds the state at t = %.17g", inst->step_function,
                     MAX_STEPS_PER_CALL, method_name(cv->method), now_abs, t_end_abs,
                     *fmu_time(inst));
             inst->cvode_needs_reinit = 1;
-            return fmi2Error;
+            return FMU_ERROR;
         }
         int restart = 0, kind = 0;
         if (flag == STEP_ROOT) {
             if (++events > MAX_EVENTS_PER_STEP) {
-                fmu_log(inst, fmi2Error, LOG_STATUS_ERROR,
-                        "fmi2DoStep: more than %ld events in one step at t = %.17g",
+                fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR,
+                        "%s: more than %ld events in one step at t = %.17g", inst->step_function,
                         MAX_EVENTS_PER_STEP, *fmu_time(inst));
                 inst->cvode_needs_reinit = 1;
-                return fmi2Error;
+                return FMU_ERROR;
             }
             /* the discrete state changed: restart the integrator at the event (auto: with the
              * non-stiff method again) */
@@ -1313,7 +1323,7 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
             restart = 1; /* a time event: the right-hand side's kink (see set_time_event_stop) */
             peaks_forget(cv);
         }
-        fmi2Status s = fmi2OK;
+        fmu_status_t s = FMU_OK;
         if (restart) {
             /* RK45 starts with the step that suited the last event of this kind: the first-step
              * estimate, made for smooth solutions, overshoots at a contact onset (the force
@@ -1339,17 +1349,23 @@ fmi2Status cs_do_step(fmu_instance_t *inst, double t_end_abs)
         } else {
             continue;
         }
-        if (s != fmi2OK) {
+        if (s != FMU_OK) {
             inst->cvode_needs_reinit = 1;
-            return fmi2Error;
+            return FMU_ERROR;
+        }
+        if (stop_at_event && kind != 0) {
+            /* early return (FMI 3.0): the step ends at the contact event, handled, with the
+             * integrator restarted there; the FMU's time is the event time (take_solution) */
+            *stopped = 1;
+            return cv->warnings > warnings ? FMU_WARNING : FMU_OK;
         }
     }
     /* CVODE warned (logged by error_handler): the step is done, with a caveat */
-    return finish_step(inst, t_end_abs, cv->warnings > warnings ? fmi2Warning : fmi2OK);
+    return finish_step(inst, t_end_abs, cv->warnings > warnings ? FMU_WARNING : FMU_OK);
 }
 
-fmi2Status cs_reset(fmu_instance_t *inst)
+fmu_status_t cs_reset(fmu_instance_t *inst)
 {
     cs_free(inst);
-    return fmi2OK;
+    return FMU_OK;
 }

@@ -1,22 +1,47 @@
-/* The FMU instance shared by the generic FMI glue (fmi2_glue.c) and the co-simulation stepper
- * (cosimulation.c). The model itself is behind the interface of fmu_model.h. */
+/* The FMU instance: everything of an FMU instance that does not depend on the FMI version, shared
+ * by the thin FMI front-ends (fmi2_glue.c: FMI 2.0, fmi3_glue.c: FMI 3.0) and the co-simulation
+ * stepper (cosimulation.c). No FMI header is included here: statuses, instance kinds and the
+ * logger are our own types, which the front-ends translate (the status values are those of both
+ * standards: OK, Warning, Discard, Error, Fatal). The model itself is behind the interface of
+ * fmu_model.h.
+ *
+ * fmu_instance.c holds the logging helper, the state machine's check, the model helpers
+ * (prepare, outputs, derivatives, event update), the experiment checks, initialization, get and
+ * set by value reference through the generated variable table, the communication-step check,
+ * model exchange's time-resolution check and the FMU state (snapshot, validation on restore,
+ * serialization). */
 #ifndef CSFH_FMU_INSTANCE_H
 #define CSFH_FMU_INSTANCE_H
 
-#include "fmi2Functions.h"
+#include <stddef.h>
+#include <stdint.h>
 
 #include "fmu_model.h"
 
-/* FMI 2.0 instance states (bit mask, one check per call). */
+/* Status of a call: the numbering of fmi2Status and fmi3Status (OK .. Fatal). */
+typedef enum {
+    FMU_OK = 0,
+    FMU_WARNING = 1,
+    FMU_DISCARD = 2,
+    FMU_ERROR = 3,
+    FMU_FATAL = 4
+} fmu_status_t;
+
+/* The interface an instance was made for (the values of fmi2Type: states serialized by FMI 2.0
+ * instances keep their meaning). */
+typedef enum { FMU_ME = 0, FMU_CS = 1 } fmu_kind_t;
+
+/* Instance states (bit mask, one check per call). FMI 3.0's Step Mode is FMU_STEP_COMPLETE; a
+ * co-simulation instance of FMI 3.0 with eventModeUsed also enters FMU_EVENT. */
 typedef enum {
     FMU_INSTANTIATED = 1 << 0,
     FMU_INITIALIZATION = 1 << 1,
-    FMU_EVENT = 1 << 2,      /* ME */
-    FMU_CONTINUOUS = 1 << 3, /* ME */
+    FMU_EVENT = 1 << 2,
+    FMU_CONTINUOUS = 1 << 3,    /* ME */
     FMU_STEP_COMPLETE = 1 << 4, /* CS */
     FMU_STEP_FAILED = 1 << 5,   /* CS */
     FMU_TERMINATED = 1 << 6,
-    FMU_ERROR = 1 << 7
+    FMU_ERROR_STATE = 1 << 7
 } fmu_state_t;
 
 /* Log categories of modelDescription.xml. */
@@ -28,17 +53,26 @@ enum {
 };
 
 typedef struct csfh_cvode csfh_cvode_t; /* opaque, cosimulation.c */
+typedef struct fmu_instance fmu_instance_t;
 
-/* Relative tolerance of the co-simulation integrator when fmi2SetupExperiment defines none (also
- * the DefaultExperiment tolerance of modelDescription.xml). */
+/* The front-end's logger: passes a formatted message to the importer's callback. */
+typedef void (*fmu_logger_t)(const fmu_instance_t *inst, fmu_status_t status,
+                             const char *category, const char *message);
+/* Any function pointer (the importer's callback, called only through its own type). */
+typedef void (*fmu_callback_t)(void);
+
+/* Relative tolerance of the co-simulation integrator when the importer defines none (also the
+ * DefaultExperiment tolerance of modelDescription.xml). */
 #define FMU_DEFAULT_TOLERANCE 1e-6
 
-typedef struct {
+struct fmu_instance {
     void *model;            /* the model struct, fmu_model.size bytes */
-    fmi2Type type;
+    fmu_kind_t type;
+    int fmi_version;        /* 2 or 3: the front-end that made the instance */
     char *instance_name;
-    fmi2CallbackLogger logger;
-    fmi2ComponentEnvironment environment;
+    fmu_logger_t log_message;  /* the front-end's adapter (NULL: no logger) */
+    fmu_callback_t logger;     /* the importer's logger, for the adapter */
+    void *environment;         /* the importer's environment pointer */
     unsigned int log_categories;
     fmu_state_t state;
     int prepared;           /* model.d is valid for the current parameters */
@@ -51,15 +85,18 @@ typedef struct {
     double stop_time;
     int stop_time_defined;
     /* co-simulation */
+    const char *step_function; /* "fmi2DoStep" or "fmi3DoStep": the name in the stepper's messages */
+    int event_mode_used;       /* FMI 3.0: the importer handles events in Event Mode */
+    int early_return_allowed;  /* FMI 3.0: fmi3DoStep may return at an event */
     csfh_cvode_t *cvode;
-    int cvode_needs_reinit; /* restart CVODE: states, inputs or tunable parameters were changed
-                               from outside, an FMU state was taken or restored */
-    /* FMU states made by this instance (fmi2GetFMUstate, fmi2DeSerializeFMUstate) and not yet
-     * freed by fmi2FreeFMUstate: only these are accepted, fmi2FreeInstance frees the rest */
+    int cvode_needs_reinit; /* restart the integrator: states, inputs or tunable parameters were
+                               changed from outside, an FMU state was taken or restored */
+    /* FMU states made by this instance (get, deserialize) and not yet freed: only these are
+     * accepted, freeing the instance frees the rest */
     void **fmu_states;
     size_t n_fmu_states, cap_fmu_states;
     /* time resolution: the warning that the double time does not resolve the steps was logged;
-     * model exchange: time and states at the last fmi2CompletedIntegratorStep (last_step_x:
+     * model exchange: time and states at the last completed integrator step (last_step_x:
      * n_states doubles) */
     int warned_time;
     int last_step_valid;
@@ -69,25 +106,143 @@ typedef struct {
      * set find a variable in constant time (a linear search cost 0.5 us per value) */
     int *vr_index;
     unsigned int n_vr_index;
-} fmu_instance_t;
+};
 
-void fmu_log(fmu_instance_t *inst, fmi2Status status, unsigned int category, const char *fmt, ...)
+/* ------------------------------------------------------------------------------------------ */
+/* life cycle */
+
+/* A new instance (state Instantiated, start values set), or NULL when out of memory. */
+fmu_instance_t *fmu_instance_new(const char *instance_name, fmu_kind_t type, int fmi_version,
+                                 int logging_on);
+void fmu_instance_free(fmu_instance_t *inst);
+/* Back to Instantiated with the start values (fmi2Reset, fmi3Reset). */
+void fmu_instance_reset(fmu_instance_t *inst);
+
+/* ------------------------------------------------------------------------------------------ */
+/* logging and call checks */
+
+void fmu_log(const fmu_instance_t *inst, fmu_status_t status, unsigned int category,
+             const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 4, 5)))
 #endif
     ;
+#define FMU_LOG_ERROR(inst, ...) fmu_log((inst), FMU_ERROR, LOG_STATUS_ERROR, __VA_ARGS__)
+
+const char *fmu_category_name(unsigned int category);
+const char *fmu_state_name(fmu_state_t s);
+/* One state-machine check per call: 1 if the instance is in one of `states` (logs the call under
+ * logAll), else 0 (logged; 0 also for a NULL instance). */
+int fmu_allowed(fmu_instance_t *inst, const char *function, unsigned int states);
+int fmu_not_null(fmu_instance_t *inst, const char *function, const void *p, const char *arg);
+int fmu_is_me(fmu_instance_t *inst, const char *function);
+int fmu_is_cs(fmu_instance_t *inst, const char *function);
+/* Debug logging: every category (n == 0) or the named ones on or off. */
+fmu_status_t fmu_set_debug_logging(fmu_instance_t *inst, const char *function, int on, size_t n,
+                                   const char *const categories[]);
+
+/* ------------------------------------------------------------------------------------------ */
+/* model helpers */
 
 /* Invalidate the output and derivative caches after the state, inputs or time changed. */
 void fmu_invalidate(fmu_instance_t *inst);
-
+/* Validate the parameters and compute derived quantities once (logged on failure). */
+fmu_status_t fmu_prepare(fmu_instance_t *inst, const char *function);
+fmu_status_t fmu_update_derivatives(fmu_instance_t *inst, const char *function);
+/* Outputs at the current state; logs a model warning once per instance. FMU_OK, FMU_WARNING or
+ * FMU_ERROR (logged, prefixed with `function`). */
+fmu_status_t fmu_update_outputs(fmu_instance_t *inst, const char *function);
 /* Discrete-state update at an event, with logging; returns fmu_model.event_update's value. */
 int fmu_event_update(fmu_instance_t *inst);
+/* The continuous states as text, for messages. */
+const char *fmu_state_text(fmu_instance_t *inst, char *text, size_t size);
+/* The next time event after the model's time (INFINITY: none). */
+double fmu_next_time_event(fmu_instance_t *inst);
 
-/* Outputs at the current state; logs a model warning once per instance. fmi2OK, fmi2Warning or
- * fmi2Error (logged, prefixed with `function`). */
-fmi2Status fmu_update_outputs(fmu_instance_t *inst, const char *function);
+/* ------------------------------------------------------------------------------------------ */
+/* experiment, initialization */
 
-/* The model's time, continuous states and derivative cache. */
+/* The checks and settings of fmi2SetupExperiment / fmi3EnterInitializationMode. */
+fmu_status_t fmu_setup_experiment(fmu_instance_t *inst, const char *function, int tolerance_defined,
+                                  double tolerance, double start_time, int stop_time_defined,
+                                  double stop_time);
+/* End of initialization: validate everything, check the start state, set the discrete state.
+ * A refused call changes nothing. The caller sets the next instance state. */
+fmu_status_t fmu_exit_initialization(fmu_instance_t *inst, const char *function);
+
+/* ------------------------------------------------------------------------------------------ */
+/* get and set through the variable table */
+
+/* The C type of the importer's value array. */
+typedef enum {
+    FMU_VALUE_DOUBLE,  /* fmi2Real, fmi3Float64 */
+    FMU_VALUE_INT,     /* fmi2Integer, fmi2Boolean (int), fmi3Int32 */
+    FMU_VALUE_INT64,   /* fmi3Int64 (enumerations) */
+    FMU_VALUE_BOOL     /* fmi3Boolean (C bool) */
+} fmu_value_kind_t;
+
+/* Variable types a call accepts: bit (1 << csfh_type_t). */
+#define FMU_ACCEPT(type) (1u << (unsigned int)(type))
+
+#define FMU_GET_STATES                                                                         \
+    (FMU_INITIALIZATION | FMU_EVENT | FMU_CONTINUOUS | FMU_STEP_COMPLETE | FMU_STEP_FAILED |  \
+     FMU_TERMINATED | FMU_ERROR_STATE)
+#define FMU_SET_STATES                                                                         \
+    (FMU_INSTANTIATED | FMU_INITIALIZATION | FMU_EVENT | FMU_CONTINUOUS | FMU_STEP_COMPLETE)
+#define FMU_ANY_STATE                                                                          \
+    (FMU_INSTANTIATED | FMU_INITIALIZATION | FMU_EVENT | FMU_CONTINUOUS | FMU_STEP_COMPLETE |  \
+     FMU_STEP_FAILED | FMU_TERMINATED | FMU_ERROR_STATE)
+
+/* value[i] of vr[i] for variables of the accepted types; the values of `accept`'s types are
+ * written as `kind`. */
+fmu_status_t fmu_get_values(fmu_instance_t *inst, const char *function, const unsigned int vr[],
+                            size_t nvr, unsigned int accept, fmu_value_kind_t kind, void *value);
+/* All or nothing: every value is checked (range, finiteness, the state's settability) before
+ * any is applied; tunable parameters set while running are validated together and rolled back
+ * together. */
+fmu_status_t fmu_set_values(fmu_instance_t *inst, const char *function, const unsigned int vr[],
+                            size_t nvr, unsigned int accept, fmu_value_kind_t kind,
+                            const void *value);
+
+/* ------------------------------------------------------------------------------------------ */
+/* model exchange and co-simulation steps */
+
+/* Model exchange: compare the completed integrator step with the previous one (fmu_instance.c:
+ * the time losing precision); FMU_OK or FMU_WARNING. */
+fmu_status_t fmu_completed_integrator_step(fmu_instance_t *inst, const char *function);
+fmu_status_t fmu_set_time(fmu_instance_t *inst, const char *function, double time);
+fmu_status_t fmu_set_continuous_states(fmu_instance_t *inst, const char *function,
+                                       const double x[], size_t nx);
+fmu_status_t fmu_get_derivatives(fmu_instance_t *inst, const char *function, double der[],
+                                 size_t nx);
+fmu_status_t fmu_get_event_indicators(fmu_instance_t *inst, const char *function, double z[],
+                                      size_t ni);
+fmu_status_t fmu_get_continuous_states(fmu_instance_t *inst, const char *function, double x[],
+                                       size_t nx);
+fmu_status_t fmu_get_nominals(fmu_instance_t *inst, const char *function, double nominal[],
+                              size_t nx);
+
+/* A communication step's arguments against the FMU's time: FMU_OK, FMU_WARNING (precision lost,
+ * logged once) or FMU_ERROR (refused, nothing changed); *t_end = t + h. */
+fmu_status_t fmu_check_step(fmu_instance_t *inst, const char *function, double t, double h,
+                            double *t_end);
+
+/* ------------------------------------------------------------------------------------------ */
+/* FMU state */
+
+fmu_status_t fmu_state_get(fmu_instance_t *inst, const char *function, void **state);
+fmu_status_t fmu_state_set(fmu_instance_t *inst, const char *function, void *state);
+fmu_status_t fmu_state_free(fmu_instance_t *inst, const char *function, void **state);
+fmu_status_t fmu_state_size(fmu_instance_t *inst, const char *function, void *state,
+                            size_t *size);
+fmu_status_t fmu_state_serialize(fmu_instance_t *inst, const char *function, void *state,
+                                 unsigned char bytes[], size_t size);
+fmu_status_t fmu_state_deserialize(fmu_instance_t *inst, const char *function,
+                                   const unsigned char bytes[], size_t size, void **state);
+
+/* ------------------------------------------------------------------------------------------ */
+/* the model's time, continuous states and derivative cache */
+
 static inline double *fmu_time(fmu_instance_t *inst)
 {
     return (double *)((char *)inst->model + fmu_model.time_offset);
@@ -101,11 +256,17 @@ static inline double *fmu_derivatives(fmu_instance_t *inst)
     return (double *)((char *)inst->model + fmu_model.der_offset);
 }
 
-/* Co-simulation (cosimulation.c). */
+/* ------------------------------------------------------------------------------------------ */
+/* co-simulation (cosimulation.c) */
+
 void cs_free(fmu_instance_t *inst);
-/* Integrate from the FMU's time to t_end (> the FMU's time; fmi2DoStep checked the arguments). */
-fmi2Status cs_do_step(fmu_instance_t *inst, double t_end);
-fmi2Status cs_reset(fmu_instance_t *inst);
+/* Integrate from the FMU's time to t_end (> the FMU's time; the caller checked the arguments).
+ * stop_at_event: return at the first event inside the step that switches the discrete state
+ * (csfh: a contact onset or release), handled, with the FMU's time = the event time and
+ * *stopped = 1 (FMI 3.0 early return); else the step goes to t_end, however many events it
+ * holds (*stopped = 0; stopped may be NULL). */
+fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end, int stop_at_event, int *stopped);
+fmu_status_t cs_reset(fmu_instance_t *inst);
 /* Bring the peak outputs of the communication step up to date (the co-simulation stepper
  * analyses RK45's steps for them only when needed): before the outputs are computed, an FMU
  * state is taken or values are set. Nothing without co-simulation. */

@@ -20,6 +20,7 @@ NOMINAL = {"body1.x": 0.01, "body1.y": 0.01, "body1.theta": 0.1}
 # the csfh FMU's own sources: the physics the FMU uses and the FMI glue, nothing of the harness
 CSFH_SOURCES = {
     "fmi2_glue.c",
+    "fmu_instance.c",
     "cosimulation.c",
     "rk45.c",
     "csfh_fmu_model.c",

@@ -1,0 +1,786 @@
+/* FMI 3.0 front-end: the fmi3* functions, a thin layer over the FMI-independent instance
+ * (fmu_instance.c) and the co-simulation stepper (cosimulation.c), like fmi2_glue.c for FMI 2.0.
+ * The same model, variable table, checks, log categories and FMU state as the FMI 2.0 build.
+ *
+ * What is FMI 3.0's own:
+ *   types     Float64 (the Real variables), Int32 (Integer), Int64 (the enumerations), Boolean
+ *             (C bool); the other types have no variables and refuse any value reference;
+ *   ME        the gap as the event indicator (modelDescription: ModelStructure/EventIndicator),
+ *             fmi3UpdateDiscreteStates with the same flags as fmi2NewDiscreteStates;
+ *   CS        Event Mode when the importer uses it (eventModeUsed), and early return
+ *             (earlyReturnAllowed): fmi3DoStep then stops at the first contact onset or release
+ *             inside the step, with the event handled (the contact mode switched), and returns
+ *             earlyReturn = true and lastSuccessfulTime = the event time, so that a master
+ *             can update its actuators there; with eventModeUsed it also asks for Event Mode
+ *             (eventHandlingNeeded). Without earlyReturnAllowed the step is never cut: the
+ *             events inside it are handled as in FMI 2.0.
+ * Not provided (refused with a message): Scheduled Execution, clocks, configuration mode,
+ * directional and adjoint derivatives, output derivatives, intermediate update. */
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <string.h>
+
+/* the standard's header declares two callback types without a prototype (`()`) */
+#if defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wstrict-prototypes"
+#endif
+#include "fmi3Functions.h"
+#if defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
+
+#include "fmu_instance.h"
+
+#define MSG_SIZE 512
+
+/* The importer's logger (the message is plain text, no format string). */
+static void log_fmi3(const fmu_instance_t *inst, fmu_status_t status, const char *category,
+                     const char *message)
+{
+    const fmi3LogMessageCallback logger = (fmi3LogMessageCallback)inst->logger;
+    logger((fmi3InstanceEnvironment)inst->environment, (fmi3Status)status, category, message);
+}
+
+#define INST(c) ((fmu_instance_t *)(c))
+#define ST(s) ((fmi3Status)(s))
+#define LOG_ERROR FMU_LOG_ERROR
+
+/* ------------------------------------------------------------------------------------------ */
+/* common functions */
+
+const char *fmi3GetVersion(void)
+{
+    return fmi3Version;
+}
+
+fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
+                               const fmi3String categories[])
+{
+    return ST(fmu_set_debug_logging(INST(instance), "fmi3SetDebugLogging", loggingOn,
+                                    nCategories, categories));
+}
+
+static fmu_instance_t *instantiate(const char *function, fmi3String instanceName,
+                                   fmi3String instantiationToken, fmu_kind_t kind,
+                                   fmi3Boolean loggingOn, fmi3InstanceEnvironment env,
+                                   fmi3LogMessageCallback logger)
+{
+    if (instanceName == NULL || instanceName[0] == '\0') {
+        if (logger) {
+            char msg[MSG_SIZE];
+            snprintf(msg, sizeof(msg), "%s: instanceName is NULL or empty", function);
+            logger(env, fmi3Error, "logStatusError", msg);
+        }
+        return NULL;
+    }
+    if (instantiationToken == NULL || strcmp(instantiationToken, fmu_model.guid) != 0) {
+        if (logger) {
+            char msg[MSG_SIZE];
+            snprintf(msg, sizeof(msg),
+                     "%s: instantiationToken does not match this binary (expected %s)", function,
+                     fmu_model.guid);
+            logger(env, fmi3Error, "logStatusError", msg);
+        }
+        return NULL;
+    }
+    fmu_instance_t *inst = fmu_instance_new(instanceName, kind, 3, loggingOn);
+    if (inst == NULL) {
+        return NULL;
+    }
+    inst->log_message = logger != NULL ? log_fmi3 : NULL;
+    inst->logger = (fmu_callback_t)logger;
+    inst->environment = env;
+    return inst;
+}
+
+fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String instantiationToken,
+                                          fmi3String resourcePath, fmi3Boolean visible,
+                                          fmi3Boolean loggingOn,
+                                          fmi3InstanceEnvironment instanceEnvironment,
+                                          fmi3LogMessageCallback logMessage)
+{
+    (void)resourcePath;
+    (void)visible;
+    return instantiate("fmi3InstantiateModelExchange", instanceName, instantiationToken, FMU_ME,
+                       loggingOn, instanceEnvironment, logMessage);
+}
+
+fmi3Instance fmi3InstantiateCoSimulation(
+    fmi3String instanceName, fmi3String instantiationToken, fmi3String resourcePath,
+    fmi3Boolean visible, fmi3Boolean loggingOn, fmi3Boolean eventModeUsed,
+    fmi3Boolean earlyReturnAllowed, const fmi3ValueReference requiredIntermediateVariables[],
+    size_t nRequiredIntermediateVariables, fmi3InstanceEnvironment instanceEnvironment,
+    fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate)
+{
+    (void)resourcePath;
+    (void)visible;
+    (void)requiredIntermediateVariables;
+    (void)intermediateUpdate; /* providesIntermediateUpdate = false: never called */
+    if (nRequiredIntermediateVariables > 0) {
+        if (logMessage) {
+            logMessage(instanceEnvironment, fmi3Error, "logStatusError",
+                       "fmi3InstantiateCoSimulation: requiredIntermediateVariables given, but "
+                       "the FMU provides no intermediate update (providesIntermediateUpdate = "
+                       "false)");
+        }
+        return NULL;
+    }
+    fmu_instance_t *inst = instantiate("fmi3InstantiateCoSimulation", instanceName,
+                                       instantiationToken, FMU_CS, loggingOn,
+                                       instanceEnvironment, logMessage);
+    if (inst != NULL) {
+        inst->event_mode_used = eventModeUsed ? 1 : 0;
+        inst->early_return_allowed = earlyReturnAllowed ? 1 : 0;
+    }
+    return inst;
+}
+
+fmi3Instance fmi3InstantiateScheduledExecution(
+    fmi3String instanceName, fmi3String instantiationToken, fmi3String resourcePath,
+    fmi3Boolean visible, fmi3Boolean loggingOn, fmi3InstanceEnvironment instanceEnvironment,
+    fmi3LogMessageCallback logMessage, fmi3ClockUpdateCallback clockUpdate,
+    fmi3LockPreemptionCallback lockPreemption, fmi3UnlockPreemptionCallback unlockPreemption)
+{
+    (void)instanceName;
+    (void)instantiationToken;
+    (void)resourcePath;
+    (void)visible;
+    (void)loggingOn;
+    (void)clockUpdate;
+    (void)lockPreemption;
+    (void)unlockPreemption;
+    if (logMessage) {
+        logMessage(instanceEnvironment, fmi3Error, "logStatusError",
+                   "fmi3InstantiateScheduledExecution: the FMU has no Scheduled Execution "
+                   "interface");
+    }
+    return NULL;
+}
+
+void fmi3FreeInstance(fmi3Instance instance)
+{
+    fmu_instance_free(INST(instance));
+}
+
+fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined,
+                                       fmi3Float64 tolerance, fmi3Float64 startTime,
+                                       fmi3Boolean stopTimeDefined, fmi3Float64 stopTime)
+{
+    fmu_instance_t *inst = INST(instance);
+    if (!fmu_allowed(inst, "fmi3EnterInitializationMode", FMU_INSTANTIATED)) {
+        return fmi3Error;
+    }
+    if (fmu_setup_experiment(inst, "fmi3EnterInitializationMode", toleranceDefined, tolerance,
+                             startTime, stopTimeDefined, stopTime) != FMU_OK) {
+        return fmi3Error; /* refused: still Instantiated */
+    }
+    inst->state = FMU_INITIALIZATION;
+    return fmi3OK;
+}
+
+fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
+{
+    fmu_instance_t *inst = INST(instance);
+    if (!fmu_allowed(inst, "fmi3ExitInitializationMode", FMU_INITIALIZATION)) {
+        return fmi3Error;
+    }
+    if (fmu_exit_initialization(inst, "fmi3ExitInitializationMode") != FMU_OK) {
+        return fmi3Error;
+    }
+    /* ME: Event Mode; CS: Event Mode if the importer uses it, else Step Mode */
+    inst->state = inst->type == FMU_ME || inst->event_mode_used ? FMU_EVENT : FMU_STEP_COMPLETE;
+    return fmi3OK;
+}
+
+fmi3Status fmi3EnterEventMode(fmi3Instance instance)
+{
+    fmu_instance_t *inst = INST(instance);
+    if (inst == NULL) {
+        return fmi3Error;
+    }
+    const unsigned int from = inst->type == FMU_ME ? (FMU_EVENT | FMU_CONTINUOUS)
+                                                   : (FMU_EVENT | FMU_STEP_COMPLETE);
+    if (!fmu_allowed(inst, "fmi3EnterEventMode", from)) {
+        return fmi3Error;
+    }
+    if (inst->type == FMU_CS && !inst->event_mode_used) {
+        LOG_ERROR(inst, "fmi3EnterEventMode: the instance was made with eventModeUsed = false");
+        return fmi3Error;
+    }
+    inst->state = FMU_EVENT;
+    return fmi3OK;
+}
+
+fmi3Status fmi3Terminate(fmi3Instance instance)
+{
+    fmu_instance_t *inst = INST(instance);
+    if (!fmu_allowed(inst, "fmi3Terminate",
+                     FMU_EVENT | FMU_CONTINUOUS | FMU_STEP_COMPLETE | FMU_STEP_FAILED)) {
+        return fmi3Error;
+    }
+    inst->state = FMU_TERMINATED;
+    return fmi3OK;
+}
+
+fmi3Status fmi3Reset(fmi3Instance instance)
+{
+    fmu_instance_t *inst = INST(instance);
+    if (!fmu_allowed(inst, "fmi3Reset", FMU_ANY_STATE)) {
+        return fmi3Error;
+    }
+    fmu_instance_reset(inst);
+    return fmi3OK;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* get and set: scalar variables only, so nValues must equal nValueReferences */
+
+static int counts_match(fmu_instance_t *inst, const char *function, size_t nvr, size_t nValues)
+{
+    if (inst != NULL && nvr != nValues) {
+        LOG_ERROR(inst, "%s: nValues = %zu, expected nValueReferences = %zu (every variable is a "
+                        "scalar)", function, nValues, nvr);
+        return 0;
+    }
+    return inst != NULL;
+}
+
+#define GET(name, accept, kind, type)                                                          \
+    fmi3Status fmi3Get##name(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,  \
+                             type values[], size_t nValues)                                     \
+    {                                                                                          \
+        if (!counts_match(INST(instance), "fmi3Get" #name, nvr, nValues)) {                    \
+            return fmi3Error;                                                                  \
+        }                                                                                      \
+        return ST(fmu_get_values(INST(instance), "fmi3Get" #name, vr, nvr, accept, kind,       \
+                                 values));                                                     \
+    }
+#define SET(name, accept, kind, type)                                                          \
+    fmi3Status fmi3Set##name(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,  \
+                             const type values[], size_t nValues)                               \
+    {                                                                                          \
+        if (!counts_match(INST(instance), "fmi3Set" #name, nvr, nValues)) {                    \
+            return fmi3Error;                                                                  \
+        }                                                                                      \
+        return ST(fmu_set_values(INST(instance), "fmi3Set" #name, vr, nvr, accept, kind,       \
+                                 values));                                                     \
+    }
+
+GET(Float64, FMU_ACCEPT(CSFH_TYPE_REAL), FMU_VALUE_DOUBLE, fmi3Float64)
+GET(Int32, FMU_ACCEPT(CSFH_TYPE_INTEGER), FMU_VALUE_INT, fmi3Int32)
+GET(Int64, FMU_ACCEPT(CSFH_TYPE_ENUMERATION), FMU_VALUE_INT64, fmi3Int64)
+GET(Boolean, FMU_ACCEPT(CSFH_TYPE_BOOLEAN), FMU_VALUE_BOOL, fmi3Boolean)
+SET(Float64, FMU_ACCEPT(CSFH_TYPE_REAL), FMU_VALUE_DOUBLE, fmi3Float64)
+SET(Int32, FMU_ACCEPT(CSFH_TYPE_INTEGER), FMU_VALUE_INT, fmi3Int32)
+SET(Int64, FMU_ACCEPT(CSFH_TYPE_ENUMERATION), FMU_VALUE_INT64, fmi3Int64)
+SET(Boolean, FMU_ACCEPT(CSFH_TYPE_BOOLEAN), FMU_VALUE_BOOL, fmi3Boolean)
+
+/* Types without variables: any value reference is unknown. */
+static fmi3Status no_variables(fmi3Instance instance, const char *function,
+                               const fmi3ValueReference vr[], size_t nvr, unsigned int states)
+{
+    fmu_instance_t *inst = INST(instance);
+    if (!fmu_allowed(inst, function, states)) {
+        return fmi3Error;
+    }
+    if (nvr > 0) {
+        LOG_ERROR(inst, "%s: unknown value reference %u (the model has no variables of this type)",
+                  function, vr != NULL ? vr[0] : 0u);
+        return fmi3Error;
+    }
+    return fmi3OK;
+}
+
+#define GET_NONE(name, type)                                                                   \
+    fmi3Status fmi3Get##name(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,  \
+                             type values[], size_t nValues)                                     \
+    {                                                                                          \
+        (void)values;                                                                          \
+        (void)nValues;                                                                         \
+        return no_variables(instance, "fmi3Get" #name, vr, nvr, FMU_GET_STATES);               \
+    }
+#define SET_NONE(name, type)                                                                   \
+    fmi3Status fmi3Set##name(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,  \
+                             const type values[], size_t nValues)                               \
+    {                                                                                          \
+        (void)values;                                                                          \
+        (void)nValues;                                                                         \
+        return no_variables(instance, "fmi3Set" #name, vr, nvr, FMU_SET_STATES);               \
+    }
+
+GET_NONE(Float32, fmi3Float32)
+GET_NONE(Int8, fmi3Int8)
+GET_NONE(UInt8, fmi3UInt8)
+GET_NONE(Int16, fmi3Int16)
+GET_NONE(UInt16, fmi3UInt16)
+GET_NONE(UInt32, fmi3UInt32)
+GET_NONE(UInt64, fmi3UInt64)
+GET_NONE(String, fmi3String)
+SET_NONE(Float32, fmi3Float32)
+SET_NONE(Int8, fmi3Int8)
+SET_NONE(UInt8, fmi3UInt8)
+SET_NONE(Int16, fmi3Int16)
+SET_NONE(UInt16, fmi3UInt16)
+SET_NONE(UInt32, fmi3UInt32)
+SET_NONE(UInt64, fmi3UInt64)
+SET_NONE(String, fmi3String)
+
+fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                         size_t valueSizes[], fmi3Binary values[], size_t nValues)
+{
+    (void)valueSizes;
+    (void)values;
+    (void)nValues;
+    return no_variables(instance, "fmi3GetBinary", vr, nvr, FMU_GET_STATES);
+}
+
+fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                         const size_t valueSizes[], const fmi3Binary values[], size_t nValues)
+{
+    (void)valueSizes;
+    (void)values;
+    (void)nValues;
+    return no_variables(instance, "fmi3SetBinary", vr, nvr, FMU_SET_STATES);
+}
+
+fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                        fmi3Clock values[])
+{
+    (void)values;
+    return no_variables(instance, "fmi3GetClock", vr, nvr, FMU_GET_STATES);
+}
+
+fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                        const fmi3Clock values[])
+{
+    (void)values;
+    return no_variables(instance, "fmi3SetClock", vr, nvr, FMU_SET_STATES);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* what the FMU does not provide */
+
+static fmi3Status not_provided(fmi3Instance instance, const char *what)
+{
+    fmu_instance_t *inst = INST(instance);
+    if (inst != NULL) {
+        LOG_ERROR(inst, "%s", what);
+    }
+    return fmi3Error;
+}
+
+fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance,
+                                               fmi3ValueReference valueReference,
+                                               size_t *nDependencies)
+{
+    (void)valueReference;
+    (void)nDependencies;
+    return not_provided(instance, "fmi3GetNumberOfVariableDependencies: not provided (the "
+                                  "dependencies are in modelDescription.xml)");
+}
+
+fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent,
+                                       size_t elementIndicesOfDependent[],
+                                       fmi3ValueReference independents[],
+                                       size_t elementIndicesOfIndependents[],
+                                       fmi3DependencyKind dependencyKinds[], size_t nDependencies)
+{
+    (void)dependent;
+    (void)elementIndicesOfDependent;
+    (void)independents;
+    (void)elementIndicesOfIndependents;
+    (void)dependencyKinds;
+    (void)nDependencies;
+    return not_provided(instance, "fmi3GetVariableDependencies: not provided (the dependencies "
+                                  "are in modelDescription.xml)");
+}
+
+fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],
+                                        size_t nUnknowns, const fmi3ValueReference knowns[],
+                                        size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
+                                        fmi3Float64 sensitivity[], size_t nSensitivity)
+{
+    (void)unknowns;
+    (void)nUnknowns;
+    (void)knowns;
+    (void)nKnowns;
+    (void)seed;
+    (void)nSeed;
+    (void)sensitivity;
+    (void)nSensitivity;
+    return not_provided(instance, "fmi3GetDirectionalDerivative: not provided "
+                                  "(providesDirectionalDerivatives = false)");
+}
+
+fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],
+                                    size_t nUnknowns, const fmi3ValueReference knowns[],
+                                    size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
+                                    fmi3Float64 sensitivity[], size_t nSensitivity)
+{
+    (void)unknowns;
+    (void)nUnknowns;
+    (void)knowns;
+    (void)nKnowns;
+    (void)seed;
+    (void)nSeed;
+    (void)sensitivity;
+    (void)nSensitivity;
+    return not_provided(instance, "fmi3GetAdjointDerivative: not provided "
+                                  "(providesAdjointDerivatives = false)");
+}
+
+fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
+{
+    return not_provided(instance, "fmi3EnterConfigurationMode: the FMU has no structural "
+                                  "parameters");
+}
+
+fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
+{
+    return not_provided(instance, "fmi3ExitConfigurationMode: the FMU has no structural "
+                                  "parameters");
+}
+
+#define NO_CLOCKS "the FMU has no clocks"
+
+fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                  fmi3Float64 intervals[], fmi3IntervalQualifier qualifiers[])
+{
+    (void)vr;
+    (void)nvr;
+    (void)intervals;
+    (void)qualifiers;
+    return not_provided(instance, "fmi3GetIntervalDecimal: " NO_CLOCKS);
+}
+
+fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                   fmi3UInt64 counters[], fmi3UInt64 resolutions[],
+                                   fmi3IntervalQualifier qualifiers[])
+{
+    (void)vr;
+    (void)nvr;
+    (void)counters;
+    (void)resolutions;
+    (void)qualifiers;
+    return not_provided(instance, "fmi3GetIntervalFraction: " NO_CLOCKS);
+}
+
+fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                               fmi3Float64 shifts[])
+{
+    (void)vr;
+    (void)nvr;
+    (void)shifts;
+    return not_provided(instance, "fmi3GetShiftDecimal: " NO_CLOCKS);
+}
+
+fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                fmi3UInt64 counters[], fmi3UInt64 resolutions[])
+{
+    (void)vr;
+    (void)nvr;
+    (void)counters;
+    (void)resolutions;
+    return not_provided(instance, "fmi3GetShiftFraction: " NO_CLOCKS);
+}
+
+fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                  const fmi3Float64 intervals[])
+{
+    (void)vr;
+    (void)nvr;
+    (void)intervals;
+    return not_provided(instance, "fmi3SetIntervalDecimal: " NO_CLOCKS);
+}
+
+fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                   const fmi3UInt64 counters[], const fmi3UInt64 resolutions[])
+{
+    (void)vr;
+    (void)nvr;
+    (void)counters;
+    (void)resolutions;
+    return not_provided(instance, "fmi3SetIntervalFraction: " NO_CLOCKS);
+}
+
+fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                               const fmi3Float64 shifts[])
+{
+    (void)vr;
+    (void)nvr;
+    (void)shifts;
+    return not_provided(instance, "fmi3SetShiftDecimal: " NO_CLOCKS);
+}
+
+fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                const fmi3UInt64 counters[], const fmi3UInt64 resolutions[])
+{
+    (void)vr;
+    (void)nvr;
+    (void)counters;
+    (void)resolutions;
+    return not_provided(instance, "fmi3SetShiftFraction: " NO_CLOCKS);
+}
+
+fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance)
+{
+    return not_provided(instance, "fmi3EvaluateDiscreteStates: not provided "
+                                  "(providesEvaluateDiscreteStates = false)");
+}
+
+fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference,
+                                      fmi3Float64 activationTime)
+{
+    (void)clockReference;
+    (void)activationTime;
+    return not_provided(instance, "fmi3ActivateModelPartition: the FMU has no Scheduled "
+                                  "Execution interface");
+}
+
+fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference vr[],
+                                    size_t nvr, const fmi3Int32 orders[], fmi3Float64 values[],
+                                    size_t nValues)
+{
+    (void)vr;
+    (void)nvr;
+    (void)orders;
+    (void)values;
+    (void)nValues;
+    return not_provided(instance, "fmi3GetOutputDerivatives: not provided "
+                                  "(maxOutputDerivativeOrder = 0)");
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* FMU state (fmu_instance.c: snapshot, the same validation on restore as FMI 2.0) */
+
+fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
+{
+    return ST(fmu_state_get(INST(instance), "fmi3GetFMUState", FMUState));
+}
+
+fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState)
+{
+    return ST(fmu_state_set(INST(instance), "fmi3SetFMUState", FMUState));
+}
+
+fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
+{
+    return ST(fmu_state_free(INST(instance), "fmi3FreeFMUState", FMUState));
+}
+
+fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size)
+{
+    return ST(fmu_state_size(INST(instance), "fmi3SerializedFMUStateSize", FMUState, size));
+}
+
+fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState,
+                                 fmi3Byte serializedState[], size_t size)
+{
+    return ST(fmu_state_serialize(INST(instance), "fmi3SerializeFMUState", FMUState,
+                                  serializedState, size));
+}
+
+fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[],
+                                   size_t size, fmi3FMUState *FMUState)
+{
+    return ST(fmu_state_deserialize(INST(instance), "fmi3DeserializeFMUState", serializedState,
+                                    size, FMUState));
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Event Mode (model exchange, and co-simulation with eventModeUsed) */
+
+fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
+                                    fmi3Boolean *terminateSimulation,
+                                    fmi3Boolean *nominalsOfContinuousStatesChanged,
+                                    fmi3Boolean *valuesOfContinuousStatesChanged,
+                                    fmi3Boolean *nextEventTimeDefined,
+                                    fmi3Float64 *nextEventTime)
+{
+    fmu_instance_t *inst = INST(instance);
+    const char *f = "fmi3UpdateDiscreteStates";
+    if (!fmu_allowed(inst, f, FMU_EVENT) ||
+        !fmu_not_null(inst, f, discreteStatesNeedUpdate, "discreteStatesNeedUpdate") ||
+        !fmu_not_null(inst, f, terminateSimulation, "terminateSimulation") ||
+        !fmu_not_null(inst, f, nominalsOfContinuousStatesChanged,
+                      "nominalsOfContinuousStatesChanged") ||
+        !fmu_not_null(inst, f, valuesOfContinuousStatesChanged, "valuesOfContinuousStatesChanged") ||
+        !fmu_not_null(inst, f, nextEventTimeDefined, "nextEventTimeDefined") ||
+        !fmu_not_null(inst, f, nextEventTime, "nextEventTime")) {
+        return fmi3Error;
+    }
+    /* the same event update as fmi2NewDiscreteStates (fmi2_glue.c: why the values-changed flag
+     * is set at every contact mode switch, and only then). In co-simulation the stepper has
+     * handled the event already (the switch is done, nothing changes here) */
+    const int mode_changed = fmu_event_update(inst) != 0;
+    if (mode_changed && inst->type == FMU_CS) {
+        inst->cvode_needs_reinit = 1;
+    }
+    *discreteStatesNeedUpdate = false;
+    *terminateSimulation = false;
+    *nominalsOfContinuousStatesChanged = false;
+    *valuesOfContinuousStatesChanged = mode_changed;
+    const double next = fmu_next_time_event(inst);
+    *nextEventTimeDefined = isfinite(next) && inst->type == FMU_ME;
+    *nextEventTime = *nextEventTimeDefined ? next : 0.0;
+    return fmi3OK;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* model exchange */
+
+fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance)
+{
+    fmu_instance_t *inst = INST(instance);
+    if (!fmu_allowed(inst, "fmi3EnterContinuousTimeMode", FMU_EVENT) ||
+        !fmu_is_me(inst, "fmi3EnterContinuousTimeMode")) {
+        return fmi3Error;
+    }
+    inst->state = FMU_CONTINUOUS;
+    return fmi3OK;
+}
+
+fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance,
+                                       fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation)
+{
+    fmu_instance_t *inst = INST(instance);
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (inst == NULL ||
+        !fmu_not_null(inst, "fmi3CompletedIntegratorStep", enterEventMode, "enterEventMode") ||
+        !fmu_not_null(inst, "fmi3CompletedIntegratorStep", terminateSimulation,
+                      "terminateSimulation")) {
+        return fmi3Error;
+    }
+    const fmu_status_t status = fmu_completed_integrator_step(inst, "fmi3CompletedIntegratorStep");
+    if (status <= FMU_WARNING) {
+        *enterEventMode = false;
+        *terminateSimulation = false;
+    }
+    return ST(status);
+}
+
+fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
+{
+    return ST(fmu_set_time(INST(instance), "fmi3SetTime", time));
+}
+
+fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],
+                                   size_t nContinuousStates)
+{
+    return ST(fmu_set_continuous_states(INST(instance), "fmi3SetContinuousStates",
+                                        continuousStates, nContinuousStates));
+}
+
+fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[],
+                                             size_t nContinuousStates)
+{
+    return ST(fmu_get_derivatives(INST(instance), "fmi3GetContinuousStateDerivatives",
+                                  derivatives, nContinuousStates));
+}
+
+fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[],
+                                  size_t nEventIndicators)
+{
+    return ST(fmu_get_event_indicators(INST(instance), "fmi3GetEventIndicators", eventIndicators,
+                                       nEventIndicators));
+}
+
+fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[],
+                                   size_t nContinuousStates)
+{
+    return ST(fmu_get_continuous_states(INST(instance), "fmi3GetContinuousStates",
+                                        continuousStates, nContinuousStates));
+}
+
+fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[],
+                                             size_t nContinuousStates)
+{
+    return ST(fmu_get_nominals(INST(instance), "fmi3GetNominalsOfContinuousStates", nominals,
+                               nContinuousStates));
+}
+
+fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators)
+{
+    fmu_instance_t *inst = INST(instance);
+    if (!fmu_allowed(inst, "fmi3GetNumberOfEventIndicators", FMU_ANY_STATE) ||
+        !fmu_not_null(inst, "fmi3GetNumberOfEventIndicators", nEventIndicators,
+                      "nEventIndicators")) {
+        return fmi3Error;
+    }
+    *nEventIndicators = (size_t)fmu_model.n_event_indicators;
+    return fmi3OK;
+}
+
+fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates)
+{
+    fmu_instance_t *inst = INST(instance);
+    if (!fmu_allowed(inst, "fmi3GetNumberOfContinuousStates", FMU_ANY_STATE) ||
+        !fmu_not_null(inst, "fmi3GetNumberOfContinuousStates", nContinuousStates,
+                      "nContinuousStates")) {
+        return fmi3Error;
+    }
+    *nContinuousStates = (size_t)fmu_model.n_states;
+    return fmi3OK;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* co-simulation (the stepper is in cosimulation.c) */
+
+fmi3Status fmi3EnterStepMode(fmi3Instance instance)
+{
+    fmu_instance_t *inst = INST(instance);
+    if (!fmu_allowed(inst, "fmi3EnterStepMode", FMU_EVENT) ||
+        !fmu_is_cs(inst, "fmi3EnterStepMode")) {
+        return fmi3Error;
+    }
+    inst->state = FMU_STEP_COMPLETE;
+    return fmi3OK;
+}
+
+fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
+                      fmi3Float64 communicationStepSize,
+                      fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                      fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation,
+                      fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime)
+{
+    fmu_instance_t *inst = INST(instance);
+    const char *f = "fmi3DoStep";
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (!fmu_allowed(inst, f, FMU_STEP_COMPLETE) || !fmu_is_cs(inst, f) ||
+        !fmu_not_null(inst, f, eventHandlingNeeded, "eventHandlingNeeded") ||
+        !fmu_not_null(inst, f, terminateSimulation, "terminateSimulation") ||
+        !fmu_not_null(inst, f, earlyReturn, "earlyReturn") ||
+        !fmu_not_null(inst, f, lastSuccessfulTime, "lastSuccessfulTime")) {
+        return fmi3Error;
+    }
+    *eventHandlingNeeded = false;
+    *terminateSimulation = false;
+    *earlyReturn = false;
+    *lastSuccessfulTime = *fmu_time(inst);
+    double t_end = 0.0;
+    const fmu_status_t checked = fmu_check_step(inst, f, currentCommunicationPoint,
+                                                communicationStepSize, &t_end);
+    if (checked > FMU_WARNING) {
+        return ST(checked); /* refused: the instance is unchanged and still usable */
+    }
+    if (communicationStepSize == 0.0) {
+        return fmi3OK;
+    }
+    int stopped = 0;
+    const fmu_status_t status = cs_do_step(inst, t_end, inst->early_return_allowed, &stopped);
+    *lastSuccessfulTime = *fmu_time(inst);
+    if (status > FMU_WARNING) {
+        inst->state = FMU_STEP_FAILED;
+        return ST(status);
+    }
+    if (stopped) {
+        /* a contact onset or release at *lastSuccessfulTime (<= t_end): the master may update
+         * its inputs there (in Event Mode when it uses it) */
+        *earlyReturn = *lastSuccessfulTime < t_end;
+        *eventHandlingNeeded = inst->event_mode_used != 0;
+    }
+    return ST(status > checked ? status : checked);
+}
