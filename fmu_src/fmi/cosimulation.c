@@ -116,6 +116,9 @@ struct csfh_cvode {
     /* CVODE (BDF, Adams); its memory is kept while RK45 runs */
     void *mem;
     int mem_method;         /* the method CVODE's memory was created with */
+    int mem_stop_set;       /* CVODE holds a stop time it has not reached, mem_stop (local; SUNDIALS
+                               6.4 clears it only when reached, CVodeReInit keeps it) */
+    double mem_stop;
     N_Vector abstol;
     SUNMatrix J;
     SUNLinearSolver LS;
@@ -397,10 +400,13 @@ static fmu_status_t solver_start(fmu_instance_t *inst, int method, double tau, d
                                   h_first),
                         "rk45_init");
     }
-    if (cv->mem != NULL && cv->mem_method == method) {
+    if (cv->mem != NULL && cv->mem_method == method && !(cv->mem_stop_set && cv->mem_stop <= tau)) {
         solver_started(cv);
         return cv_check(inst, CVodeReInit(cv->mem, tau, cv->y), "CVodeReInit");
     }
+    /* new memory also where the old one holds a stop time at or behind tau: RK45 has passed it
+     * since (auto), and CVODE would refuse to step */
+    cv->mem_stop_set = 0;
     if (cv->mem != NULL) {
         CVodeFree(&cv->mem);
     }
@@ -458,7 +464,11 @@ static int solver_step(fmu_instance_t *inst, double *tret)
         cv_check(inst, flag, "CVode");
         return STEP_FAILED;
     }
-    return flag == CV_ROOT_RETURN ? STEP_ROOT : flag == CV_TSTOP_RETURN ? STEP_TSTOP : STEP_OK;
+    if (flag == CV_TSTOP_RETURN) {
+        cv->mem_stop_set = 0; /* reached: CVODE has cleared it */
+        return STEP_TSTOP;
+    }
+    return flag == CV_ROOT_RETURN ? STEP_ROOT : STEP_OK;
 }
 
 /* The next stop time (local; > the integrator's current time): no step goes beyond it. */
@@ -468,6 +478,8 @@ static fmu_status_t solver_set_stop_time(fmu_instance_t *inst, double tau_stop)
     if (cv->method == FMU_CS_RK45) {
         return rk_check(inst, rk45_set_stop_time(cv->rk, tau_stop), "rk45_set_stop_time");
     }
+    cv->mem_stop_set = 1;
+    cv->mem_stop = tau_stop;
     return cv_check(inst, CVodeSetStopTime(cv->mem, tau_stop), "CVodeSetStopTime");
 }
 

@@ -3,10 +3,10 @@ different route than the C core (numerical quadrature instead of the closed form
 coordinates instead of the tip frame, scipy's integrators instead of CVODE). Nothing here calls
 the package or the FMU; the tests compare the FMU and the harness with these numbers.
 
-* Flexure (docs/model.md §1-2): the tip compliance of the circular arc by Gauss-Legendre quadrature of
-  the Castigliano integrals (2.3) written in global coordinates (moment arm from the arc points,
-  axial and shear force from the section's tangent and normal), the stiffness K0 = C^-1, and the
-  co-rotated elastic force (2.7)-(2.9).
+* Flexure (docs/model.md §1-2): the tip compliance of the circular arc by Gauss-Legendre
+  quadrature of the Castigliano integrals (2.3) written in global coordinates (moment arm from
+  the arc points, axial and shear force from the section's tangent and normal), the stiffness
+  K0 = C^-1, and the co-rotated elastic force (2.7)-(2.9).
 * The flight of body 1 on the flexure under gravity to the first contact (gap = 0), by scipy's
   DOP853 with event location.
 * Contact stiffnesses (4.2)-(4.4), the damping factors (4.6), the ESDU law (4.7) in its explicit

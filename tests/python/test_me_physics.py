@@ -207,8 +207,8 @@ def test_power_laws_force_at_an_indentation(
 
 @pytest.mark.parametrize("E", [100e9, 210e9])
 def test_esdu_law_force_indentation_pairs(make_fmu: Any, vr: dict[str, int], E: float) -> None:
-    """ESDU-78035 (paper Eq. 18, docs/model.md §4.5): for forces F from 30 N to 3e5 N the test computes
-    the indentation rho(F) = a F [ln(F*/F) + 1] (the equation's explicit direction; the FMU
+    """ESDU-78035 (paper Eq. 18, docs/model.md §4.5): for forces F from 30 N to 3e5 N the test
+    computes the indentation rho(F) = a F [ln(F*/F) + 1] (the equation's explicit direction; the FMU
     inverts it), starts the FMU at rest at that indentation (no damping) and reads F_N: reading
     I2 gives F itself, reading I3 the tangent stiffness K_t(F) = 1/(a ln(F*/F)) times rho^1.5
     (4.12). The FMU's Newton iteration is converged to 1e-15: 1e-10 relative."""

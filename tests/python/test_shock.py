@@ -509,3 +509,30 @@ def test_shock_report_is_consistent_with_its_runs(tmp_path: Path) -> None:
     )
     assert not (out / "shock_montecarlo.png").exists()
     assert "Monte Carlo" not in (out / "shock.md").read_text()
+
+
+def test_auto_switching_integrators_across_the_pulse_end() -> None:
+    """The mems scene at rest (as `csfh shock` starts it) under JESD22-B104-B (1500 g, 0.5 ms) at
+    135 degrees, LN_spheres, 1e-6 s communication steps: auto runs BDF with the pulse's end as
+    its stop time, goes back to RK45, which passes the pulse's end itself, and later tries BDF
+    again. CVODE's memory must not keep the stop time it was given before (SUNDIALS 6.4 clears
+    it only when CVODE reaches it): the run failed with "tstop = 0.0005 is behind current t".
+    It completes, and agrees with BDF alone (the same pulse, the same contacts) within the
+    integration tolerance."""
+    pulse = {
+        "shock.peak": 1500 * G_STANDARD,
+        "shock.duration": 5e-4,
+        "shock.start": 0.0,
+        "shock.angle": math.radians(135),
+        "flexure.track_stress_peak": True,
+    }
+    scene = replace(load_scene("mems"), u0=(0.0, 0.0, 0.0))
+    auto = simulate_cs(scene, "LN_spheres", communication_step=1e-6, parameters=pulse)
+    bdf = simulate_cs(
+        scene, "LN_spheres", communication_step=1e-6, parameters={**pulse, "solver.method": 2}
+    )
+    a, b = auto.summary(), bdf.summary()
+    assert a["contacts"] == b["contacts"] >= 3
+    assert a["max_F_N"] == pytest.approx(b["max_F_N"], rel=1e-4)
+    scale = float(np.max(np.abs(bdf.table["y"])))
+    np.testing.assert_allclose(auto.table["y"], bdf.table["y"], rtol=0, atol=1e-5 * scale)

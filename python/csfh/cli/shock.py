@@ -75,8 +75,8 @@ def register(sub: Any) -> None:
         "--step",
         metavar="H",
         help="communication step of the runs in s: the peaks inside each step are located on "
-        "CVODE's interpolant whatever it is (default: 10 x the scene's output_interval; the "
-        "figure of stresses over time is drawn on the output_interval)",
+        "the integrator's interpolant whatever it is (default: 10 x the scene's "
+        "output_interval; the figure of stresses over time is drawn on the output_interval)",
     )
     p.add_argument(
         "--tolerance",

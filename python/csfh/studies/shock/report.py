@@ -76,7 +76,7 @@ def plot_time(
     axes[0].set_ylabel("|a_frame| [g]")
     axes[0].set_title(
         f"Shock {spec.pulse.describe()} on scene {spec.scene.name} (the frame's acceleration)\n"
-        "▼ the peak over a communication step, located on CVODE's interpolant",
+        "▼ the peak over a communication step, located on the integrator's interpolant",
         fontsize=9,
     )
     axes[0].grid(alpha=0.3)
@@ -207,10 +207,12 @@ def write_markdown(
         f"* Start: the scene's configuration q0 = {list(spec.scene.q0)} at rest relative to the "
         "frame (the scene's start, not necessarily its static equilibrium: a body that is not "
         f"held there moves under gravity as well); horizon {spec.stop_time:g} s.",
-        f"* Models: {', '.join(spec.models)}; co-simulation, CVODE inside the FMU, rtol "
+        f"* Models: {', '.join(spec.models)}; co-simulation, the integrator inside the FMU "
+        "(solver.method auto: RK45, BDF where the motion is stiff), rtol "
         f"{spec.rtol:g}, communication step {spec.step:g} s; the pulse is evaluated in the "
-        "right-hand side and CVODE stops at its start and end (docs/model.md §14.8); the peaks are "
-        "located on CVODE's interpolant inside every step (flexure.track_stress_peak).",
+        "right-hand side and the integrator stops at its start and end (docs/model.md §14.8); "
+        "the peaks are located on the integrator's interpolant inside every step "
+        "(flexure.track_stress_peak).",
         f"* Allowables: flexure {_mpa(allow['flexure.stress_allowable'])} MPa, contact "
         f"{_mpa(allow['contact.pressure_allowable'])} MPa; margin = 1 − peak/allowable; a "
         "direction passes when both margins are ≥ 0.",

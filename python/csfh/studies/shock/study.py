@@ -4,11 +4,11 @@ their allowables; and a Monte Carlo over tolerances that gives the probability o
 
 Every run is a co-simulation of the FMU with the pulse inside the model (shock.peak,
 shock.duration, shock.start, shock.angle: a(t) is evaluated in the right-hand side at the
-integrator's time, and CVODE stops and restarts at the pulse's ends, docs/model.md §14.8) and
-flexure.track_stress_peak on, so that the peaks are located on CVODE's interpolant inside every
-communication step. The runs go through the task system (csfh.batch): batched in the FMU's own
-binary (csfh.runners.cs_batch), kept in the output directory (an interrupted command resumes),
-serial, on local processes or on Dask with identical results.
+integrator's time, and the integrator stops and restarts at the pulse's ends, docs/model.md
+§14.8) and flexure.track_stress_peak on, so that the peaks are located on the integrator's
+interpolant inside every communication step. The runs go through the task system (csfh.batch):
+batched in the FMU's own binary (csfh.runners.cs_batch), kept in the output directory (an
+interrupted command resumes), serial, on local processes or on Dask with identical results.
 
 The start: the scene's configuration q0 at rest relative to the frame (u = 0), before the pulse
 starts at `start` (default 0); the device is thereby assumed to sit still when the shock comes

@@ -190,4 +190,5 @@ def stickslip_check(tr: Trajectory, model: str, integ: str) -> tuple[bool, str, 
         omega = float(tr.table["omega"][min(i, len(tr.t) - 1)])
         tol = 2e-3 if integ != "RK4" else 0.05
     ok = abs(omega - expected) <= tol * expected
-    return ok, f"omega after the first contact {omega:.4f} rad/s (docs/model.md §7.6: {expected})", {}
+    text = f"omega after the first contact {omega:.4f} rad/s (docs/model.md §7.6: {expected})"
+    return ok, text, {}
