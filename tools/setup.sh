@@ -104,25 +104,48 @@ fi
 vpy="$venv/bin/python"
 
 step 3 "the csfh package${extras:+ with extras $extras} (pip builds the FMUs for every platform: several minutes the first time)"
-stamp="$venv/.csfh-install-stamp"
+stamp="$venv/.csfh-install-stamp"  # line 1: the hash of the sources, line 2: the extras installed
 inputs_hash() {
   {
-    printf '%s\n' "extras=$extras" "$("$vpy" -c 'import sys; print(sys.version)')"
+    "$vpy" -c 'import sys; print(sys.version)'
     find pyproject.toml CMakeLists.txt cmake tools/fmu_package.py tools/macho_fat.py python fmu_src modelDescription -type f \
       ! -path '*/__pycache__/*' ! -name '*.pyc' -print0 | LC_ALL=C sort -z | xargs -0 sha256sum
   } | sha256sum | cut -d' ' -f1
 }
 installed() { env -u PYTHONPATH "$vpy" -c 'import csfh.paths as p; p.fmu_path(); p.core_library_path()' 2>/dev/null; }
+# the extras of `have` (comma lists) that `want` lacks
+missing_extras() { local e out=""; for e in ${1//,/ }; do case ",$2," in *",$e,"*) ;; *) out+="${out:+,}$e" ;; esac; done; echo "$out"; }
 hash="$(inputs_hash)"
-if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$hash" ] && installed; then
-  echo "setup: up to date (nothing csfh is built from has changed since it was installed)"
+had_extras=""
+[ -f "$stamp" ] && had_extras="$(sed -n 2p "$stamp")"
+if [ -f "$stamp" ] && [ "$(sed -n 1p "$stamp")" = "$hash" ] && installed; then
+  new_extras="$(missing_extras "$extras" "$had_extras")"
+  if [ -z "$new_extras" ]; then
+    echo "setup: up to date (nothing csfh is built from has changed since it was installed)"
+  else
+    # the package is current: only the extras' own requirements (pyproject.toml), no rebuild
+    echo "setup: csfh is up to date; adding the requirements of the extras $new_extras"
+    mapfile -t requirements < <("$vpy" - "$new_extras" <<'PY'
+import sys, tomllib
+with open("pyproject.toml", "rb") as f:
+    optional = tomllib.load(f)["project"]["optional-dependencies"]
+for extra in sys.argv[1].split(","):
+    print("\n".join(optional[extra]))
+PY
+)
+    "$vpy" -m pip install --disable-pip-version-check "${requirements[@]}" 2>&1 \
+      | sed -u '/^Requirement already satisfied/d'
+    printf '%s\n%s\n' "$hash" "$had_extras${had_extras:+${new_extras:+,}}$new_extras" >"$stamp"
+  fi
 else
   rm -f "$stamp"
   spec="."
   [ -n "$extras" ] && spec=".[$extras]"
   "$vpy" -m pip install --disable-pip-version-check "$spec" 2>&1 \
     | sed -u '/^Requirement already satisfied/d'
-  echo "$hash" >"$stamp"
+  # extras installed before stay installed (pip removes nothing)
+  new_extras="$(missing_extras "$extras" "$had_extras")"
+  printf '%s\n%s\n' "$hash" "$had_extras${had_extras:+${new_extras:+,}}$new_extras" >"$stamp"
 fi
 echo
 echo "setup: done in ${SECONDS}s: $(env -u PYTHONPATH "$vpy" -c 'import csfh, csfh.paths; print("csfh", csfh.__version__, "with", csfh.paths.fmu_path())')"

@@ -45,7 +45,7 @@ static int cmp(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* the central scene (PHYSICS.md 7.1): paper preset, no flexure, no friction, q0 = [0, 0.01, 0] */
+/* the central scene (docs/model.md §7.1): paper preset, no flexure, no friction, q0 = [0, 0.01, 0] */
 static void setup(csfh_model_t *m, int law)
 {
     char msg[256];

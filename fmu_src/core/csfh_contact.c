@@ -43,7 +43,7 @@ void csfh_contact_kinematics(double delta, double R1, const double s1bar[2], con
     }
     kin->t[0] = -kin->n[1]; /* rot90 */
     kin->t[1] = kin->n[0];
-    kin->a[0] = s1[0] - R1 * kin->n[0]; /* corrected arm (PHYSICS.md 3, errata of Eqs. 30, 38) */
+    kin->a[0] = s1[0] - R1 * kin->n[0]; /* corrected arm (docs/model.md §3, errata of Eqs. 30, 38) */
     kin->a[1] = s1[1] - R1 * kin->n[1];
     kin->DN[0] = kin->n[0];
     kin->DN[1] = kin->n[1];

@@ -1,5 +1,5 @@
 /* Contact kinematics of the conjugate cylinders, with the corrected arm a = s1 - R1 n_c
- * (PHYSICS.md section 3; paper Eqs. 10-12, 32, 34, 38, 39). Pure functions, SI units. */
+ * (docs/model.md §3; paper Eqs. 10-12, 32, 34, 38, 39). Pure functions, SI units. */
 #ifndef CSFH_CONTACT_H
 #define CSFH_CONTACT_H
 
@@ -21,7 +21,7 @@ double csfh_contact_gap(double delta, const double s1bar[2], const double q[3]);
 void csfh_contact_kinematics(double delta, double R1, const double s1bar[2], const double q[3],
                              csfh_contact_kin_t *kin);
 
-/* Generalized contact force Q_c = D^T [F_N, F_T] (PHYSICS.md 3), added to Q. */
+/* Generalized contact force Q_c = D^T [F_N, F_T] (docs/model.md §3), added to Q. */
 void csfh_contact_add_force(const csfh_contact_kin_t *kin, double F_N, double F_T, double Q[3]);
 
 #endif

@@ -11,7 +11,7 @@ void csfh_arc_compliance(const csfh_arc_beam_t *beam, double C[3][3])
     const double s = sin(beta), c = cos(beta), s2 = sin(2.0 * beta);
     const double EI = beam->E * beam->b * beam->h * beam->h * beam->h / 12.0;
 
-    /* bending part, PHYSICS.md 2.2 */
+    /* bending part, docs/model.md §2.2 */
     const double kb = rho / EI;
     C[0][0] = kb * rho * rho * (1.5 * beta - 2.0 * s + 0.25 * s2);
     C[0][1] = kb * rho * rho * (1.0 - c - 0.5 * s * s);
@@ -21,7 +21,7 @@ void csfh_arc_compliance(const csfh_arc_beam_t *beam, double C[3][3])
     C[2][2] = kb * beta;
 
     if (!beam->bending_only) {
-        /* axial and shear parts act on the force block only, PHYSICS.md 2.2 */
+        /* axial and shear parts act on the force block only, docs/model.md §2.2 */
         const double EA = beam->E * beam->b * beam->h;
         const double GA = beam->E / (2.0 * (1.0 + beam->nu)) * beam->b * beam->h;
         const double ka = rho / EA, ks = beam->kappa * rho / GA;
@@ -58,7 +58,7 @@ int csfh_mat3_inverse(const double A[3][3], double Ainv[3][3])
 
 double csfh_flexure_frame_angle(double phi_root, double beta)
 {
-    return phi_root + beta + 0.5 * CSFH_PI; /* PHYSICS.md 1.3: n = tangent at the tip */
+    return phi_root + beta + 0.5 * CSFH_PI; /* docs/model.md §1.3: n = tangent at the tip */
 }
 
 int csfh_flexure_setup(const csfh_arc_beam_t *beam, const double OF[2], double phi_root,
@@ -69,7 +69,7 @@ int csfh_flexure_setup(const csfh_arc_beam_t *beam, const double OF[2], double p
     if (csfh_mat3_inverse(C, Khat) != 0) {
         return -1;
     }
-    /* K0 = blk(R) Khat blk(R)^T with R = A(psi) the local -> body rotation (PHYSICS.md 1.3, 2.5) */
+    /* K0 = blk(R) Khat blk(R)^T with R = A(psi) the local -> body rotation (docs/model.md §1.3, 2.5) */
     const double psi = csfh_flexure_frame_angle(phi_root, beam->beta);
     const double R[3][3] = {{cos(psi), -sin(psi), 0.0}, {sin(psi), cos(psi), 0.0}, {0.0, 0.0, 1.0}};
     double RK[3][3];
@@ -90,7 +90,7 @@ int csfh_flexure_setup(const csfh_arc_beam_t *beam, const double OF[2], double p
             flex->K0[i][j] = flex->K0[j][i] = avg;
         }
     }
-    /* attachment point with G1 = O2 = origin in the undeformed state (PHYSICS.md 1.2) */
+    /* attachment point with G1 = O2 = origin in the undeformed state (docs/model.md §1.2) */
     const double phi_tip = phi_root + beam->beta;
     flex->sbar[0] = OF[0] + beam->rho * cos(phi_tip);
     flex->sbar[1] = OF[1] + beam->rho * sin(phi_tip);
@@ -122,7 +122,7 @@ double csfh_flexure_force(const csfh_flexure_t *flex, const double q[3], double 
         w[1] = s * wb[0] + c * wb[1];
         w[2] = wb[2];
     }
-    /* Q_e = -T_e(s) w, T_e row 3 = [s^T 1bar, 1]: s^T 1bar F = s x F (Eq. 9, PHYSICS.md 2.4) */
+    /* Q_e = -T_e(s) w, T_e row 3 = [s^T 1bar, 1]: s^T 1bar F = s x F (Eq. 9, docs/model.md §2.4) */
     Q[0] = -w[0];
     Q[1] = -w[1];
     Q[2] = -(sx * w[1] - sy * w[0] + w[2]);

@@ -1,4 +1,4 @@
-/* Ambrosio friction (PHYSICS.md 5.1, paper Eq. 26). Pure functions, SI units. */
+/* Ambrosio friction (docs/model.md §5.1, paper Eq. 26). Pure functions, SI units. */
 #ifndef CSFH_FRICTION_H
 #define CSFH_FRICTION_H
 

@@ -312,7 +312,7 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
     c->touching = 1;
     c->rho = -c->kin.gap;
     c->rho_dot = -(c->kin.DN[0] * u[0] + c->kin.DN[1] * u[1] + c->kin.DN[2] * u[2]);
-    /* the onset rate captured at the event (PHYSICS.md 5.2); before the event (contact_by_gap)
+    /* the onset rate captured at the event (docs/model.md §5.2); before the event (contact_by_gap)
      * the state's own rate, continuous at the event */
     const double onset = m->z.in_contact ? m->z.onset_speed : c->rho_dot;
     c->status = csfh_normal_force(&m->d.normal, c->rho, c->rho_dot, onset, &c->F_N);
@@ -402,7 +402,7 @@ int csfh_model_check_start(const csfh_model_t *m, char *msg, size_t msg_size)
     if (m->p.law == CSFH_CONTACTLAW_NONE) {
         return 0;
     }
-    /* indentation = -g, the gap of PHYSICS.md section 3 */
+    /* indentation = -g, the gap of docs/model.md §3 */
     const double indentation = -csfh_contact_gap(m->d.delta, m->p.s1bar, m->x);
     if (!(indentation > m->p.max_initial_indentation)) {
         return 0;

@@ -1,5 +1,5 @@
 /* The CSFH model: parameters, states and the right-hand side of
- * M q'' = Q_e + Q_g + Q_c + Q_ext + Q_base (PHYSICS.md conventions, paper Eqs. 27-30; the base
+ * M q'' = Q_e + Q_g + Q_c + Q_ext + Q_base (docs/model.md conventions, paper Eqs. 27-30; the base
  * acceleration of docs/model.md §14.1), plus the contact mode logic of the event-driven compliant
  * models and the stress outputs (§14.2-14.4). No FMI types here: the FMI glue, the CVODE co-simulation and the Python
  * harness (through the core library) call these functions. */

@@ -16,7 +16,7 @@ void csfh_moreau_default_options(csfh_moreau_options_t *o)
 }
 
 /* Solve the one-contact problem for Lambda given G (2x2 SPD), c = gamma_free + [eps gamma_A,N, 0]
- * (PHYSICS.md 6.2, exact case enumeration). Returns the mode. */
+ * (docs/model.md §6.2, exact case enumeration). Returns the mode. */
 static int solve_contact(const double G[2][2], const double c[2], double mu_stick, double fd,
                          double Lambda[2])
 {

@@ -1,4 +1,4 @@
-/* Moreau-Jean midpoint time stepping for the single frictional contact (PHYSICS.md section 6,
+/* Moreau-Jean midpoint time stepping for the single frictional contact (docs/model.md §6,
  * paper Eqs. 31-39), written as a recipe: system (csfh_model_t: smooth forces and contact
  * kinematics, the same functions the FMU uses), law (Newton restitution + Coulomb friction with
  * f_a / f_d), integrator (midpoint drift-kick-drift) and solver (exact case enumeration of the

@@ -117,7 +117,7 @@ int csfh_esdu_force(const csfh_esdu_t *esdu, double rho, double *F)
 
 double csfh_esdu_tangent_stiffness(const csfh_esdu_t *esdu, double F)
 {
-    /* d rho/dF = a ln(F_max/F) (PHYSICS.md 4.5) */
+    /* d rho/dF = a ln(F_max/F) (docs/model.md §4.5) */
     return 1.0 / (esdu->a * log(esdu->F_max / F));
 }
 
@@ -130,9 +130,9 @@ int csfh_normal_elastic_force(const csfh_normal_law_t *law, double rho, double *
     double F_esdu;
     const int status = csfh_esdu_force(&law->esdu, rho, &F_esdu);
     if (law->esdu_reading == CSFH_ESDUREADING_I2) {
-        *F_el = F_esdu; /* reading I2 (PHYSICS.md 4.6) */
+        *F_el = F_esdu; /* reading I2 (docs/model.md §4.6) */
     } else {
-        /* reading I3: tangent stiffness used as K in K rho^n (PHYSICS.md 4.6) */
+        /* reading I3: tangent stiffness used as K in K rho^n (docs/model.md §4.6) */
         const double K_t = status == CSFH_LAW_OK && F_esdu > 0.0
                                ? csfh_esdu_tangent_stiffness(&law->esdu, F_esdu)
                                : csfh_esdu_tangent_stiffness(&law->esdu, 0.5 * law->esdu.F_max);

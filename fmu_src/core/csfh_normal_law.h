@@ -1,4 +1,4 @@
-/* Normal contact force laws (PHYSICS.md section 4; paper Eqs. 13-25), selected by
+/* Normal contact force laws (docs/model.md §4; paper Eqs. 13-25), selected by
  * csfh_contact_law_t behind one interface. Pure functions, SI units. */
 #ifndef CSFH_NORMAL_LAW_H
 #define CSFH_NORMAL_LAW_H
@@ -6,7 +6,7 @@
 #include "csfh_enums.h"
 
 /* ESDU-78035 journal-bearing law rho(F) = a F [ln(F_max/F) + 1] (Eq. 18 rewritten):
- * a = (sigma1 + sigma2)/L, F_max = F* = 4 L dR/(sigma1 + sigma2) (PHYSICS.md 4.5). */
+ * a = (sigma1 + sigma2)/L, F_max = F* = 4 L dR/(sigma1 + sigma2) (docs/model.md §4.5). */
 typedef struct {
     double a;     /* m/N */
     double F_max; /* N: rho(F) is increasing only below F*, rho(F*) = 4 dR */
@@ -18,7 +18,7 @@ typedef struct {
     double K;     /* stiffness of the power law K rho^n, N/m^n (unused by LN_ESDU I2) */
     double n;     /* exponent */
     double xi;    /* damping factor of F = F_el (1 + xi rhodot / rhodot0) */
-    double v_min; /* floor of the onset rate rhodot0, m/s (PHYSICS.md 5.2) */
+    double v_min; /* floor of the onset rate rhodot0, m/s (docs/model.md §5.2) */
     csfh_esdu_t esdu;
 } csfh_normal_law_t;
 
@@ -30,14 +30,14 @@ typedef struct {
 double csfh_sigma(double E, double nu, int with_pi);
 
 /* Hertz sphere stiffness K = 4/(3 (sigma1 + sigma2)) sqrt(R_eff) (Eq. 14), N/m^1.5; R_eff is
- * R1 R2/(R1 + R2) (as printed) or, with internal, R1 R2/(R2 - R1) (conformal, PHYSICS.md 4.1). */
+ * R1 R2/(R1 + R2) (as printed) or, with internal, R1 R2/(R2 - R1) (conformal, docs/model.md §4.1). */
 double csfh_stiffness_spheres(double E1, double nu1, double E2, double nu2, double R1, double R2,
                               int internal);
 
-/* Cylinder stiffness (pi/4) E* L (Eqs. 16-17 times the contact length, PHYSICS.md 4.2), N/m. */
+/* Cylinder stiffness (pi/4) E* L (Eqs. 16-17 times the contact length, docs/model.md §4.2), N/m. */
 double csfh_stiffness_cylinders(double E1, double nu1, double E2, double nu2, double L);
 
-/* Contact modulus E* of Eq. (17): 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (PHYSICS.md 4.2), Pa. */
+/* Contact modulus E* of Eq. (17): 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (docs/model.md §4.2), Pa. */
 double csfh_contact_modulus(double E1, double nu1, double E2, double nu2);
 
 /* Hertz line contact of parallel cylinders along the length L under the normal force F_N
@@ -48,7 +48,7 @@ double csfh_contact_modulus(double E1, double nu1, double E2, double nu2);
 double csfh_hertz_line_pressure(double F_N, double E_star, double L, double R_eff,
                                 double *half_width);
 
-/* Damping factor xi (PHYSICS.md 4.4): LN 3(1 - cr^2)/4, Hunt-Crossley 3(1 - cr)/2,
+/* Damping factor xi (docs/model.md §4.4): LN 3(1 - cr^2)/4, Hunt-Crossley 3(1 - cr)/2,
  * Flores 8(1 - cr)/(5 cr); 0 for CSFH_CONTACTLAW_NONE. */
 double csfh_damping_factor(csfh_contact_law_t law, double cr);
 
@@ -62,7 +62,7 @@ double csfh_esdu_indentation(const csfh_esdu_t *esdu, double F);
  * CSFH_LAW_ESDU_CLAMPED (rho >= 4 dR: F = F*). */
 int csfh_esdu_force(const csfh_esdu_t *esdu, double rho, double *F);
 
-/* Tangent stiffness dF/drho = 1/(a ln(F_max/F)), N/m (PHYSICS.md 4.5). */
+/* Tangent stiffness dF/drho = 1/(a ln(F_max/F)), N/m (docs/model.md §4.5). */
 double csfh_esdu_tangent_stiffness(const csfh_esdu_t *esdu, double F);
 
 /* Elastic part F_el(rho) of the selected law (rho > 0). */

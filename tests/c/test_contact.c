@@ -1,4 +1,4 @@
-/* Contact kinematics (PHYSICS.md section 3): gap, normal, arm a = s1 - R1 n_c and the Jacobian
+/* Contact kinematics (docs/model.md §3): gap, normal, arm a = s1 - R1 n_c and the Jacobian
  * rows DN, DT, against finite differences of g(q) and of the velocity of the material point of
  * body 1 that is the contact point; the worked example of section 3; G = D M^-1 D^T; |e| -> 0. */
 #include <math.h>
@@ -124,7 +124,7 @@ static void test_jacobians(void)
     }
 }
 
-/* PHYSICS.md 3: pure rotation theta_dot = 1 rad/s, contact at the bottom -> v_T = -0.180 m/s */
+/* docs/model.md §3: pure rotation theta_dot = 1 rad/s, contact at the bottom -> v_T = -0.180 m/s */
 static void test_rotation_example(void)
 {
     const double s1bar[2] = {0.0, 0.0};
@@ -164,7 +164,7 @@ static void test_delassus(void)
             }
         }
         CHECK_CLOSE(G[0][0], 0.1, 1e-14, TFMT("G_NN = 1/m = 0.1 (%d)", k));
-        CHECK_CLOSE(G[1][1], 0.30037, 2e-5, TFMT("G_TT = 0.30037 (PHYSICS 3) (%d)", k));
+        CHECK_CLOSE(G[1][1], 0.30037, 2e-5, TFMT("G_TT = 0.30037 (docs/model.md §3) (%d)", k));
         CHECK_CLOSE(G[1][1], 1.0 / m + R1 * R1 / I, 1e-14, TFMT("G_TT = 1/m + R1^2/I (%d)", k));
         CHECK_ABS(G[0][1], 0.0, 1e-16, TFMT("G_NT = 0: normal and tangent decouple (%d)", k));
         CHECK_ABS(G[0][1], G[1][0], 1e-16, "G symmetric");

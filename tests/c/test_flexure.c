@@ -1,5 +1,5 @@
 /* Flexure: compliance of the circular-arc cantilever, stiffness K0 and the generalized elastic
- * force (PHYSICS.md 1.2-1.3, 2.1-2.5). Oracles: the numbers printed in PHYSICS.md, an independent
+ * force (docs/model.md §1.2-1.3, 2.1-2.5). Oracles: the numbers printed in docs/model.md, an independent
  * Castigliano quadrature written here in GLOBAL coordinates, the straight-cantilever limit,
  * finite differences and a closed-loop work integral. */
 #include <math.h>
@@ -105,7 +105,7 @@ static void gauss_jordan_inverse(const double A[3][3], double X[3][3])
     }
 }
 
-/* Numerical Castigliano in the GLOBAL frame (PHYSICS.md 2.3 (a)): the arc points are
+/* Numerical Castigliano in the GLOBAL frame (docs/model.md §2.3 (a)): the arc points are
  * P(phi) = O_F + rho [cos phi, sin phi], phi in [phi_root, phi_root + beta] (counter-clockwise),
  * the tip C1 = P(phi_root + beta). A tip load (Fx, Fy, M) gives at section phi the moment
  * m = M + (C1 - P) x F, axial force N = F . tau and shear V = F . nu (tau the arc tangent, nu the
@@ -150,7 +150,7 @@ static void castigliano_global(double rho, double beta, double phi_root, double 
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* (a) compliance and stiffness at beta = 300 deg against PHYSICS.md 2.2 */
+/* (a) compliance and stiffness at beta = 300 deg against docs/model.md §2.2 */
 static void test_compliance_table1(void)
 {
     const double EI = EH * BB * HH * HH * HH / 12.0;
@@ -172,7 +172,7 @@ static void test_compliance_table1(void)
     }
     /* dimensionless coefficients (6 digits; c_nt, c_tM, c_MM exact) */
     const double r = RHO;
-    /* c_nn = 3 beta/2 - 2 s + s2/4 = 9.3695261: PHYSICS.md prints 9.36954 (last digit off by one,
+    /* c_nn = 3 beta/2 - 2 s + s2/4 = 9.3695261: the reference value 9.36954 (last digit off by one,
      * while its C_b[0][0] = 1.074327e-3 agrees with 9.369526), hence 2e-6 */
     CHECK_CLOSE(Cb[0][0] * EI / (r * r * r), 9.36954, 2e-6, "c_nn = 9.36954");
     CHECK_CLOSE(Cb[0][1] * EI / (r * r * r), 0.125, 1e-12, "c_nt = 1/8 exactly");
@@ -230,7 +230,7 @@ static void test_castigliano_quadrature(void)
         csfh_arc_compliance(&beam, C);
         castigliano_global(RHO, BETA, 0.0, EH, NUH, HH, BB, KAPPA, bending_only, 20000, Cg);
         /* rotate the global result into the tip frame: C_local = blk(R)^T C_g blk(R), with
-         * R_nt = A(30 deg) (PHYSICS.md 1.3) */
+         * R_nt = A(30 deg) (docs/model.md §1.3) */
         double R[3][3], Rt[3][3], T1[3][3], Cl[3][3];
         blk_rot(TEST_PI / 6.0, R);
         mat3_transpose(R, Rt);
@@ -286,7 +286,7 @@ static void test_castigliano_quadrature(void)
     }
 }
 
-/* (c) straight-cantilever limit (PHYSICS.md 2.3 (b)) */
+/* (c) straight-cantilever limit (docs/model.md §2.3 (b)) */
 static void test_straight_limit(void)
 {
     const double L = 0.05;
@@ -296,7 +296,7 @@ static void test_straight_limit(void)
                              {0.0, L * L * L / (3.0 * EI), L * L / (2.0 * EI)},
                              {0.0, L * L / (2.0 * EI), L / EI}};
     const double betas[3] = {1e-1, 1e-2, 1e-3};
-    /* PHYSICS.md quotes the error max|C - C_s| / max|C_s| as 8.33e-4, 8.33e-5, 8.33e-6 (3 digits).
+    /* The reference values of the error max|C - C_s| / max|C_s|: 8.33e-4, 8.33e-5, 8.33e-6 (3 digits).
      * Note: that measure is dominated by C_nM = L^2 beta/(6 EI) against C_MM = L/EI, so it equals
      * L beta/6 (with L in m), which coincides with beta^2/12 only at beta = 0.1; the entry whose
      * relative error is exactly beta^2/12 to leading order is C_tM (1 - cos beta vs beta^2/2). */
@@ -314,7 +314,7 @@ static void test_straight_limit(void)
         }
         err /= max_abs3(Cs);
         CHECK_CLOSE(err, ref_maxerr[k], 6e-4,
-                    TFMT("straight limit: max-normalised error at beta = %g (PHYSICS 2.3 b)", beta));
+                    TFMT("straight limit: max-normalised error at beta = %g (docs/model.md §2.3 b)", beta));
         CHECK_CLOSE(err, L * beta / 6.0, 1e-3, TFMT("max-normalised error = L beta/6, beta = %g", beta));
         const double rel_tM = (C[1][2] - Cs[1][2]) / Cs[1][2];
         CHECK_CLOSE(rel_tM, -beta * beta / 12.0, 1e-2,
@@ -337,7 +337,7 @@ static void test_straight_limit(void)
     }
 }
 
-/* (d) K0 and the attachment point (PHYSICS.md 1.2, 1.3, 2.5) */
+/* (d) K0 and the attachment point (docs/model.md §1.2, 1.3, 2.5) */
 static void test_K0_setup(void)
 {
     const double K0_full[3][3] = {{3235.980, 655.4226, -510.8502},
@@ -385,7 +385,7 @@ static void test_K0_setup(void)
     CHECK_ABS(t[1], (OF[1] - flex.sbar[1]) / RHO, 1e-14, "t = (O_F - C1)/rho, y");
 }
 
-/* independent evaluation of PHYSICS.md 2.4 with explicit matrices */
+/* independent evaluation of docs/model.md §2.4 with explicit matrices */
 static double ref_force(const double K0[3][3], const double sbar[2], int conservative,
                         const double q[3], double Q[3])
 {
@@ -412,7 +412,7 @@ static double ref_force(const double K0[3][3], const double sbar[2], int conserv
     return 0.5 * (dp[0] * w[0] + dp[1] * w[1] + dp[2] * w[2]);
 }
 
-/* (e) generalized elastic force values (PHYSICS.md 2.4) */
+/* (e) generalized elastic force values (docs/model.md §2.4) */
 static void test_force_values(void)
 {
     const csfh_arc_beam_t beam = table1_beam(0);
@@ -433,7 +433,7 @@ static void test_force_values(void)
     CHECK_ABS(Q[1], -0.6554, 0.505e-4, "Q_e(q=[1e-3,0,0])_y = -0.6554");
     CHECK_ABS(Q[2], 0.2395, 0.505e-4, "Q_e(q=[1e-3,0,0])_theta = 0.2395");
 
-    /* q0 = [0.01, 0.01, 0] -> [-38.914, -46.482, -4.6926]. The moment was computed in PHYSICS.md
+    /* q0 = [0.01, 0.01, 0] -> [-38.914, -46.482, -4.6926]. The reference moment was computed
      * with the rounded Table-1 sbar = [0.2920, -0.02471]; with that sbar all three components must
      * match to half a unit of the last digit. */
     const double qa[3] = {0.01, 0.01, 0.0};
@@ -587,7 +587,7 @@ static double loop_work(const csfh_flexure_t *flex, double a, int N, double *E_m
     return W * 2.0 * TEST_PI / N;
 }
 
-/* (h) closed-loop work: the co-rotated law is non-conservative at the magnitude of PHYSICS 2.4 */
+/* (h) closed-loop work: the co-rotated law is non-conservative at the magnitude of docs/model.md §2.4 */
 static void test_loop_work(void)
 {
     const csfh_arc_beam_t beam = table1_beam(0);
@@ -598,7 +598,7 @@ static void test_loop_work(void)
     const double W1b = loop_work(&flex, 1e-3, 4096, &Etmp);
     const double W2 = loop_work(&flex, 1e-2, 2048, &Emax2);
     CHECK_ABS(W1, W1b, 1e-6 * fabs(W1), "loop work converged in the number of nodes");
-    /* PHYSICS.md: -2.3e-7 J (a = 1 mm), -2.3e-3 J (a = 1 cm): two digits */
+    /* docs/model.md: -2.3e-7 J (a = 1 mm), -2.3e-3 J (a = 1 cm): two digits */
     CHECK_ABS(W1, -2.3e-7, 0.05e-7, "co-rotated loop work, a = 1 mm: -2.3e-7 J");
     CHECK_ABS(W2, -2.3e-3, 0.05e-3, "co-rotated loop work, a = 1 cm: -2.3e-3 J");
     CHECK_CLOSE(W2 / W1, 1e4, 0.02, "loop work scales as a^4 (centred loop)");

@@ -1,4 +1,4 @@
-/* Ambrosio friction (PHYSICS.md 5.1, paper Eq. 26): properties over a sweep of v_T and F_N. */
+/* Ambrosio friction (docs/model.md §5.1, paper Eq. 26): properties over a sweep of v_T and F_N. */
 #include <math.h>
 #include <stdio.h>
 
@@ -52,7 +52,7 @@ static void test_sweep(void)
     CHECK_TRUE(dead, "F_T = 0 for |v_T| <= v0");
     CHECK_TRUE(full, "F_T = -f_d F_N sgn(v_T) for |v_T| >= v1");
     CHECK_TRUE(odd, "odd symmetry F_T(-v) = -F_T(v)");
-    CHECK_TRUE(formula, "c_d and F_T = -f_d c_d F_N sgn(v_T) as written in PHYSICS 5.1");
+    CHECK_TRUE(formula, "c_d and F_T = -f_d c_d F_N sgn(v_T) as written in docs/model.md §5.1");
 }
 
 static void test_points_and_continuity(void)

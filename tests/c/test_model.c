@@ -41,7 +41,7 @@ static void test_defaults_prepare(void)
     csfh_model_t m;
     char msg[MSG_SIZE] = "";
     csfh_model_set_defaults(&m);
-    /* a few start values of the `paper` preset (PHYSICS.md 1.1, 9) */
+    /* a few start values of the `paper` preset (docs/model.md §1.1, 9) */
     CHECK_ABS(m.p.m1, 10.0, 0.0, "default body1.m = 10");
     CHECK_ABS(m.p.I1, 0.1617, 0.0, "default body1.I = 0.1617");
     CHECK_ABS(m.p.g, 9.81, 0.0, "default g = 9.81");
@@ -371,7 +371,7 @@ static void test_derivatives(void)
     CHECK_INT(csfh_model_derivatives(&m, m.time, xbad2, xdot), CSFH_ERR_NONFINITE, "NaN position with flexure -> error");
     m.p.flexure_enabled = 0;
 
-    /* flexure at q0 = [0.01, 0.01, 0] (out of contact): Q_e/M with PHYSICS 2.4's numbers */
+    /* flexure at q0 = [0.01, 0.01, 0] (out of contact): Q_e/M with docs/model.md §2.4's numbers */
     csfh_model_set_defaults(&m);
     csfh_model_prepare(&m, msg, sizeof(msg));
     csfh_model_init_discrete(&m);
@@ -379,7 +379,7 @@ static void test_derivatives(void)
     csfh_model_derivatives(&m, m.time, m.x, xdot);
     CHECK_ABS(xdot[3] * 10.0, -38.914, 0.505e-3, "flexure: m xdot_vx = Q_e,x = -38.914");
     CHECK_ABS(xdot[4] * 10.0 + 98.1, -46.482, 0.505e-3, "flexure: m (xdot_vy + g) = Q_e,y = -46.482");
-    /* moment: PHYSICS used the rounded Table-1 sbar (see test_flexure): bound 1.5e-4 N m */
+    /* moment: the reference used the rounded Table-1 sbar (see test_flexure): bound 1.5e-4 N m */
     CHECK_ABS(xdot[5] * 0.1617, -4.6926, 0.505e-4 + 1.5e-4, "flexure: I xdot_omega = Q_e,theta ~ -4.6926");
 
     /* contact, central, flexure off: F_N = K rho^1.5 (1 + xi rhodot/rhodot0) along +Y */
@@ -547,7 +547,7 @@ static void test_events(void)
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* energy balance of the whole right-hand side (PHYSICS.md 7.5): c_r = 1, no friction, the
+/* energy balance of the whole right-hand side (docs/model.md §7.5): c_r = 1, no friction, the
  * conservative flexure (fixed K0) and gravity; own fixed-step RK4 through several impacts.
  * The total energy output (kinetic + gravity + flexure + contact) must be conserved. */
 static void rk4_step(csfh_model_t *m, double *x, double h)
@@ -583,7 +583,7 @@ static double energy_drift(int flex, double h, int *contacts, double *E0_out)
     m.p.conservative = 1;
     /* fixed steps that do not locate the onset: the force acts by the gap (the paper's RK4) */
     m.contact_by_gap = 1;
-    if (!flex) { /* PHYSICS 7.5: q0 = [0, 0.01, 0], u0 = [0.3, 0, 0.5] */
+    if (!flex) { /* docs/model.md §7.5: q0 = [0, 0.01, 0], u0 = [0.3, 0, 0.5] */
         const double x0[6] = {0.0, 0.01, 0.0, 0.3, 0.0, 0.5};
         memcpy(m.x, x0, sizeof(x0));
     }
@@ -619,7 +619,7 @@ static void test_energy_conservation(void)
         const double d1 = energy_drift(flex, 1e-6, &c1, &E0);
         const double d2 = energy_drift(flex, 5e-7, &c2, &E0);
         if (!flex) {
-            CHECK_CLOSE(E0, 1.4512, tol_digits(1.4512, 5), "PHYSICS 7.5: E0 = 1.4512 J");
+            CHECK_CLOSE(E0, 1.4512, tol_digits(1.4512, 5), "docs/model.md §7.5: E0 = 1.4512 J");
         }
         CHECK_TRUE(c1 >= 2 && c1 == c2,
                    TFMT("energy test goes through impacts (flexure %d: %d contacts)", flex, c2));
@@ -639,7 +639,7 @@ static void test_start_check_peaks_and_numbers(void)
     char msg[MSG_SIZE] = "";
     setup_default(&m);
     CHECK_INT(csfh_model_check_start(&m, msg, sizeof(msg)), 0, "default start accepted");
-    /* q0 = [0.05, 0, 0]: |e| = 0.05, delta = 0.02: 0.03 m deep (PHYSICS.md section 3) */
+    /* q0 = [0.05, 0, 0]: |e| = 0.05, delta = 0.02: 0.03 m deep (docs/model.md §3) */
     m.x[0] = 0.05;
     m.x[1] = 0.0;
     CHECK_INT(csfh_model_check_start(&m, msg, sizeof(msg)), -1, "0.03 m deep refused");
@@ -684,7 +684,7 @@ static void test_start_check_peaks_and_numbers(void)
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* Each law's force in the model at one state (PHYSICS.md 4.1-4.4): the stiffness the law uses
+/* Each law's force in the model at one state (docs/model.md §4.1-4.4): the stiffness the law uses
  * (spheres for LN_spheres, Hunt-Crossley and Flores; cylinders for LN_cylinders), computed here
  * from the materials (Eq. 14 external radius, Eq. 16 times L), and its damping factor (4.6):
  * F_N = K rho^n (1 + xi rho'/rho'-) at the bottom of the bore, in contact mode. */

@@ -1,4 +1,4 @@
-/* The Moreau stepper (csfh_moreau.c) against closed-form results of PHYSICS.md section 6 and
+/* The Moreau stepper (csfh_moreau.c) against closed-form results of docs/model.md §6 and
  * 7.4-7.6, computed here from the geometry (not with the core's kinematics):
  *
  *  - one impact step of the central drop: Lambda_N = m1 ((1 + c_r) v + g h), the post-step
@@ -47,7 +47,7 @@ static void start_at_contact(const csfh_model_t *m, const double dir[2], double 
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* Closed form of one contact step for s1-bar = 0 (PHYSICS.md 6.2, G of 3.6): normal n_c =
+/* Closed form of one contact step for s1-bar = 0 (docs/model.md §6.2, G of 3.6): normal n_c =
  * -e/|e| at the midpoint, t_c = rot90(n_c), D_N = [n, 0], D_T = [t, -R1], G = diag(1/m1,
  * 1/m1 + R1^2/I1). mu_stick: f_a or f_d. */
 typedef struct {
@@ -104,7 +104,7 @@ static void test_central_impact_step(void)
     csfh_moreau_options_t o;
     csfh_moreau_default_options(&o);
     o.h = H;
-    const double v = sqrt(2.0 * 9.81 * 0.03); /* PHYSICS.md 7.1 */
+    const double v = sqrt(2.0 * 9.81 * 0.03); /* docs/model.md §7.1 */
     const double dir[2] = {0.0, -1.0};
     double u[3] = {0.0, -v, 0.0}, q[3];
     start_at_contact(&m, dir, 1e-9, u, q);
@@ -139,7 +139,7 @@ static void test_central_impact_step(void)
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* PHYSICS.md 7.6: the first asymmetric impact, from q0 = [0.01, 0.01, 0]: the contact at -60
+/* docs/model.md §7.6: the first asymmetric impact, from q0 = [0.01, 0.01, 0]: the contact at -60
  * degrees (n_c = [-0.5, 0.866]), the free-fall velocity 0.732140 m/s, gamma_N- = -0.634 m/s,
  * v_T- = +0.366 m/s; sticking needs |Lambda_T|/Lambda_N = 0.1012, between f_d and f_a. */
 static void asymmetric_state(const csfh_model_t *m, double q[3], double u[3])

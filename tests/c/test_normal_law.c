@@ -1,4 +1,4 @@
-/* Normal contact laws (PHYSICS.md sections 4, 5.2, 7.2, 7.3, 8): stiffness formulas, damping
+/* Normal contact laws (docs/model.md §4, 5.2, 7.2, 7.3, 8): stiffness formulas, damping
  * factors, impacts integrated here with an own RK4 through csfh_normal_force (undamped Hertz
  * against the closed form and the table of 7.2; effective restitution of LN, Hunt-Crossley and
  * Flores against 7.3), the ESDU law (4.5, 4.6), elastic energies by own quadrature, the
@@ -16,7 +16,7 @@
 #define B 0.025
 #define G_ACC 9.81
 
-static const double V_IMP_REF = 0.767203; /* PHYSICS.md 7.1 */
+static const double V_IMP_REF = 0.767203; /* docs/model.md §7.1 */
 
 static csfh_normal_law_t power_law(csfh_contact_law_t which, double K, double n, double cr)
 {
@@ -40,7 +40,7 @@ static csfh_normal_law_t esdu_law(csfh_esdu_reading_t reading, double E, int wit
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* (a) stiffness formulas (PHYSICS.md 4.1-4.3) */
+/* (a) stiffness formulas (docs/model.md §4.1-4.3) */
 static void test_stiffness(void)
 {
     const double nu = 0.3;
@@ -57,7 +57,7 @@ static void test_stiffness(void)
         CHECK_CLOSE(csfh_stiffness_cylinders(E, nu, E, nu, B), 0.25 * TEST_PI / ssum * B, 1e-14,
                     TFMT("K_cylinders = (pi/4) E* b, E = %g", E));
     }
-    /* PHYSICS.md numbers */
+    /* docs/model.md numbers */
     CHECK_CLOSE(csfh_stiffness_spheres(210e9, nu, 210e9, nu, R1, R2, 0), 4.73528e10,
                 tol_digits(4.73528e10, 6), "K_spheres external, E = 210 GPa = 4.73528e10 (Table 2)");
     CHECK_CLOSE(csfh_stiffness_spheres(210e9, nu, 210e9, nu, R1, R2, 1), 2.0641e11,
@@ -66,14 +66,14 @@ static void test_stiffness(void)
                 tol_digits(2.2549e10, 5), "K_spheres external, E = 100 GPa = 2.2549e10");
     CHECK_CLOSE(csfh_stiffness_spheres(100e9, nu, 100e9, nu, R1, R2, 1), 9.8289e10,
                 tol_digits(9.8289e10, 5), "K_spheres internal, E = 100 GPa = 9.8289e10");
-    /* PHYSICS.md 4.3 prints "(pi/4) 1.153846e11 0.025 = 2.26562e9", but that product is
-     * 2.265572e9 (the closed form above holds to 1e-14); its other quotes, 2.2656 GPa m (key
-     * finding 4) and 2.2656e9 (7.2), agree with 2.265572e9. Checked against 5 digits, and the
+    /* The reference value for docs/model.md §4.3, "(pi/4) 1.153846e11 0.025 = 2.26562e9", is
+     * off: that product is 2.265572e9 (the closed form above holds to 1e-14); the other
+     * reference values, 2.2656 GPa m and 2.2656e9 (§7.2), agree with 2.265572e9. Checked against 5 digits, and the
      * 6-digit misprint within 3e-5. */
     CHECK_CLOSE(csfh_stiffness_cylinders(210e9, nu, 210e9, nu, B), 2.2656e9,
                 tol_digits(2.2656e9, 5), "K_cylinders (pi/4)E* b, E = 210 GPa = 2.2656e9 (Table 2)");
     CHECK_CLOSE(csfh_stiffness_cylinders(210e9, nu, 210e9, nu, B), 2.26562e9, 3e-5,
-                "K_cylinders vs the 2.26562e9 of PHYSICS 4.3 (misprint in the 5th digit)");
+                "K_cylinders vs the reference 2.26562e9 (misprint in the 5th digit)");
     CHECK_CLOSE(csfh_stiffness_cylinders(100e9, nu, 100e9, nu, 1.0), 4.3154e10,
                 tol_digits(4.3154e10, 5), "(pi/4) E*, E = 100 GPa = 4.3154e10 Pa (4.2)");
     /* sigma with pi gives the same Hertz prefactor (4.1): 4/(3 pi (sigma1+sigma2)) */
@@ -89,7 +89,7 @@ static void test_stiffness(void)
                 "K_cylinders with different materials");
 }
 
-/* (b) damping factors (PHYSICS.md 4.4) */
+/* (b) damping factors (docs/model.md §4.4) */
 static void test_damping_factors(void)
 {
     CHECK_CLOSE(csfh_damping_factor(CSFH_CONTACTLAW_LN_SPHERES, 0.9), 0.1425, 1e-14, "xi LN = 0.1425");
@@ -168,7 +168,7 @@ static impact_t impact(const csfh_normal_law_t *law, double m, double v, double 
     return r; /* t_c < 0: no exit */
 }
 
-/* (c) undamped Hertz impact (PHYSICS.md 7.2) */
+/* (c) undamped Hertz impact (docs/model.md §7.2) */
 static void test_hertz_impact(void)
 {
     const double v = sqrt(2.0 * G_ACC * 0.03);
@@ -225,7 +225,7 @@ static void test_hertz_impact(void)
     }
 }
 
-/* (d) effective restitution, no gravity (PHYSICS.md 7.3): measured e_eff vs input c_r */
+/* (d) effective restitution, no gravity (docs/model.md §7.3): measured e_eff vs input c_r */
 static void test_effective_restitution(void)
 {
     const double v = sqrt(2.0 * G_ACC * 0.03), K = 47.35e9;
@@ -258,7 +258,7 @@ static void test_effective_restitution(void)
     }
 }
 
-/* central impact with gravity during contact (PHYSICS.md 7.3 second paragraph, 4.6) */
+/* central impact with gravity during contact (docs/model.md §7.3 second paragraph, 4.6) */
 static void test_impact_with_gravity(void)
 {
     const double v = sqrt(2.0 * G_ACC * 0.03);
@@ -305,7 +305,7 @@ static void test_impact_with_gravity(void)
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* (e) ESDU (PHYSICS.md 4.5) */
+/* (e) ESDU (docs/model.md §4.5) */
 static double my_esdu_rho(double F, double ssum, double L, double dR)
 {
     return F * ssum / L * (log(4.0 * L * dR / (F * ssum)) + 1.0);
@@ -407,7 +407,7 @@ static void test_esdu(void)
     csfh_esdu_force(&es210, 1e-7, &Fa);
     csfh_esdu_force(&es210, 5e-4, &Fb2);
     CHECK_CLOSE(csfh_esdu_tangent_stiffness(&es210, Fa), 5.5e8, tol_digits(5.5e8, 2), "E = 210 GPa: K_t(1e-7 m) = 5.5e8");
-    /* PHYSICS.md quotes 1.27e9 at 5e-4 m; Eq. (18) gives 1.2628e9 there (the K_t = 1/(drho/dF)
+    /* The reference value is 1.27e9 at 5e-4 m; Eq. (18) gives 1.2628e9 there (the K_t = 1/(drho/dF)
      * identity is checked by finite differences above), so the quote holds to 1 % only */
     CHECK_CLOSE(csfh_esdu_tangent_stiffness(&es210, Fb2), 1.27e9, 1e-2, "E = 210 GPa: K_t(5e-4 m) ~ 1.27e9");
 
@@ -494,7 +494,7 @@ static void test_elastic_energy(void)
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* (g) no adhesion, the onset-speed floor (PHYSICS.md 4, 5.2) */
+/* (g) no adhesion, the onset-speed floor (docs/model.md §4, 5.2) */
 static void test_clamp_and_floor(void)
 {
     const csfh_contact_law_t laws[] = {CSFH_CONTACTLAW_LN_SPHERES, CSFH_CONTACTLAW_HUNTCROSSLEY,

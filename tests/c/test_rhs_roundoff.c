@@ -52,7 +52,7 @@ static void test_helpers(void)
     CHECK_TRUE(csfh_norm2(0.0, 0.0) == 0.0, "norm of 0 is 0");
 }
 
-/* The contact force on body 1 at (q, u), textbook formulas with hypot and pow (PHYSICS.md 3,
+/* The contact force on body 1 at (q, u), textbook formulas with hypot and pow (docs/model.md §3,
  * 4.1, 5.1): returns Q_c, and in Q_scale the round-off scale of each component: the sizes of
  * the terms that were summed, the elastic force's amplified by the gap's conditioning (rho =
  * |e| - delta cancels: an ulp of |e| is |e| / rho ulps of rho, and F ~ rho^1.5). */

@@ -3,7 +3,7 @@ different route than the C core (numerical quadrature instead of the closed form
 coordinates instead of the tip frame, scipy's integrators instead of CVODE). Nothing here calls
 the package or the FMU; the tests compare the FMU and the harness with these numbers.
 
-* Flexure (PHYSICS.md 1-2): the tip compliance of the circular arc by Gauss-Legendre quadrature of
+* Flexure (docs/model.md §1-2): the tip compliance of the circular arc by Gauss-Legendre quadrature of
   the Castigliano integrals (2.3) written in global coordinates (moment arm from the arc points,
   axial and shear force from the section's tangent and normal), the stiffness K0 = C^-1, and the
   co-rotated elastic force (2.7)-(2.9).
@@ -23,12 +23,12 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-G = 9.81  # m/s^2, along -Y (PHYSICS.md 0)
+G = 9.81  # m/s^2, along -Y (docs/model.md §0)
 
 
 @dataclass(frozen=True)
 class Flexure:
-    """Table 1 of the paper (PHYSICS.md 1.1): arc centre O_F, radius rho, opening beta from the
+    """Table 1 of the paper (docs/model.md §1.1): arc centre O_F, radius rho, opening beta from the
     root at polar angle phi_root; section b x h; beam material E, nu; shear factor kappa."""
 
     rho: float = 0.144
@@ -109,7 +109,7 @@ MASS = np.array([10.0, 10.0, 0.1617])  # m1, m1, I1 (Table 1)
 
 
 def natural_frequencies(flexure: Flexure, mass: np.ndarray = MASS) -> np.ndarray:
-    """Natural frequencies [Hz] of body 1 on the flexure: det(K_G - w^2 M) = 0 (PHYSICS.md
+    """Natural frequencies [Hz] of body 1 on the flexure: det(K_G - w^2 M) = 0 (docs/model.md
     7.7), ascending."""
     KG = flexure.linear_stiffness()
     Mi = np.diag(1.0 / np.sqrt(mass))
@@ -126,7 +126,7 @@ def first_contact_of_flight(
     rtol: float = 1e-12,
 ) -> tuple[float, np.ndarray]:
     """Time and state [x, y, theta, vx, vy, omega] of the first contact (the gap (3.1) of
-    PHYSICS.md 3 with s1-bar = 0: delta - |r| = 0) of body 1 released at rest from q0, under
+    docs/model.md §3 with s1-bar = 0: delta - |r| = 0) of body 1 released at rest from q0, under
     gravity and the flexure (None: free fall); DOP853 with event location at rtol (position
     error ~ rtol x 0.01 m, time error ~ that / the approach speed ~ 1e-14 s at 1e-12)."""
     K0 = flexure.stiffness() if flexure is not None else None
@@ -157,7 +157,7 @@ def first_contact_of_flight(
 
 
 # ------------------------------------------------------------------------------------------
-# contact laws (PHYSICS.md 4)
+# contact laws (docs/model.md §4)
 
 
 def sigma(E: float, nu: float) -> float:
@@ -197,7 +197,7 @@ def xi(law: str, cr: float) -> float:
 
 @dataclass(frozen=True)
 class Esdu:
-    """ESDU-78035 (paper Eq. 18, PHYSICS.md 4.5) with sigma_k = (1 - nu_k^2)/(pi E_k)."""
+    """ESDU-78035 (paper Eq. 18, docs/model.md §4.5) with sigma_k = (1 - nu_k^2)/(pi E_k)."""
 
     E1: float = 210e9
     E2: float = 210e9

@@ -26,7 +26,7 @@ G, CR = 9.81, 0.9
 
 
 def rigid_impact_times(n: int) -> np.ndarray:
-    """PHYSICS.md 7.4: exact rigid bounce sequence of the central scene."""
+    """docs/model.md §7.4: exact rigid bounce sequence of the central scene."""
     t = [math.sqrt(2 * 0.03 / G)]
     v = math.sqrt(2 * G * 0.03)
     for _ in range(n - 1):
@@ -45,7 +45,7 @@ def test_moreau_is_first_order_in_the_impact_times() -> None:
         errors.append(float(np.max(np.abs(tr.impacts["t"][:4] - exact))))
     slope = np.polyfit(np.log(hs), np.log(errors), 1)[0]
     assert 0.8 < slope < 1.3, (slope, errors)
-    # each bounce is late by at most a few steps (PHYSICS.md 6.3), over four bounces
+    # each bounce is late by at most a few steps (docs/model.md §6.3), over four bounces
     assert all(e <= 5 * h for e, h in zip(errors, hs, strict=True)), errors
 
 
@@ -81,7 +81,7 @@ def test_contact_peaks_are_found_on_the_interpolant() -> None:
 
 def test_rk4_bisection_locates_the_onset_within_the_event_tolerance() -> None:
     """The paper's scheme: the penetration at the accepted onset is at most the tolerance, so
-    the onset time is within tol / v of the exact one (PHYSICS.md 7.1)."""
+    the onset time is within tol / v of the exact one (docs/model.md §7.1)."""
     scene = load_scene("central")
     t_exact, v = math.sqrt(2 * 0.03 / G), math.sqrt(2 * G * 0.03)
     for h0, tol in ((2e-4, 1e-4), (5e-5, 1e-6), (1.25e-5, 1e-8)):

@@ -38,9 +38,9 @@ TIGHT = 1e-10
 STATES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
 ERROR = 3
 G = 9.81
-T_FIRST_CENTRAL = math.sqrt(2 * 0.03 / G)  # PHYSICS.md 7.1
+T_FIRST_CENTRAL = math.sqrt(2 * 0.03 / G)  # docs/model.md §7.1
 V_FIRST_CENTRAL = math.sqrt(2 * G * 0.03)
-RHO_MAX_CENTRAL = 1.19279e-4  # PHYSICS.md 7.2, K_spheres, m: the indentation scale
+RHO_MAX_CENTRAL = 1.19279e-4  # docs/model.md §7.2, K_spheres, m: the indentation scale
 R1 = 0.18  # m, contact.R1 of the paper's scenes (Table 2)
 METHODS = {"auto": 1, "BDF": 2, "Adams": 3, "RK45": 4}  # enumeration SolverMethod
 TRIAL = "auto: trying BDF"  # auto's logEvents line when RK45 struggles
@@ -203,7 +203,7 @@ def test_onset_located_well_below_the_indentation_scale(
     """At the default tolerance (1e-6) the first central onset is at the analytic instant to
     within 1e-3 of the indentation scale (|dt| v_imp < 1e-3 rho_max = 1.2e-7 m), although the
     step (1e-2 s) is 20 times the contact duration, and the onset indentation rate is captured
-    (PHYSICS.md 7.1: 0.767203 m/s)."""
+    (docs/model.md §7.1: 0.767203 m/s)."""
     scene = load_scene("central")
     fmu, log = cs_instance(make_fmu, model_description, scene, tolerance=None)
     refs = {v.name: v.valueReference for v in model_description.modelVariables}
@@ -682,7 +682,7 @@ def test_auto_switches_to_bdf_in_resting_contact(
     below the time scale of the motion). RK45 alone is held to steps at its stability limit and
     Adams to steps of that period; auto tries BDF (logged), whose steps are far longer, and
     needs at most half of RK45's and of Adams' steps and no more than BDF's; all four end at
-    rest at the static indentation (m g / K)^(2/3) (PHYSICS.md 7.2): within 1e-3 of it, except
+    rest at the static indentation (m g / K)^(2/3) (docs/model.md §7.2): within 1e-3 of it, except
     RK45 alone, which keeps an oscillation at its stability limit of the size its tolerance
     allows (the positions' absolute tolerance, 1e-6 x 0.01 m = 1e-8 m = 6e-3 of the static
     indentation 1.6e-6 m; measured 2e-3)."""

@@ -387,7 +387,7 @@ def test_calculated_parameters(make_fmu: MakeFmu, vr: dict[str, int], kind: str)
     assert get("flexure.sbar[1]") == pytest.approx(0.2920, abs=5e-5)
     assert get("flexure.sbar[2]") == pytest.approx(-0.02471, abs=5e-6)
     assert get("contact.xi") == pytest.approx(0.75 * (1.0 - 0.9 * 0.9), rel=1e-15)
-    # PHYSICS.md 4.5: F* = 4 L dR / (sigma1 + sigma2) with sigma = (1 - nu^2)/(pi E) (E = 210
+    # docs/model.md §4.5: F* = 4 L dR / (sigma1 + sigma2) with sigma = (1 - nu^2)/(pi E) (E = 210
     # GPa, nu = 0.3, L = 0.025 m, dR = 0.02 m): 7.25e8 N, where d rho/dF of Eq. (18) vanishes
     sigma = (1 - 0.3**2) / (math.pi * 210e9)
     F_star = 4 * 0.025 * 0.02 / (2 * sigma)

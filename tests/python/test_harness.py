@@ -1,4 +1,4 @@
-"""The harness: scenes, the Moreau stepper against PHYSICS.md section 7, the four-model
+"""The harness: scenes, the Moreau stepper against docs/model.md §7, the four-model
 comparison, and the command line."""
 
 from __future__ import annotations
@@ -21,12 +21,12 @@ from csfh.runners.moreau import moreau
 
 G = 9.81
 CR = 0.9
-T_FIRST_CENTRAL = math.sqrt(2 * 0.03 / G)  # PHYSICS.md 7.1
+T_FIRST_CENTRAL = math.sqrt(2 * 0.03 / G)  # docs/model.md §7.1
 V_IMPACT = math.sqrt(2 * G * 0.03)
 
 
 # ------------------------------------------------------------------------------------------
-# Moreau against PHYSICS.md 7.4-7.6
+# Moreau against docs/model.md §7.4-7.6
 
 
 @pytest.fixture(scope="module")
@@ -110,7 +110,7 @@ def test_moreau_first_asymmetric_impact(
 
 @pytest.mark.parametrize("rule", ["memory", "paper"])
 def test_moreau_rolls_without_slip_where_static_friction_holds(rule: str) -> None:
-    """PHYSICS.md 6.4, the other half of the memory rule: a contact that is stuck stays stuck
+    """docs/model.md §6.4, the other half of the memory rule: a contact that is stuck stays stuck
     while |Lambda_T| <= f_a Lambda_N. Body 1 starts at rest, touching the bore at the angle phi0
     from the bottom (no flexure). Rolling without slip there needs the friction ratio
     |F_T|/F_N = tan(phi0) I/(I + m R1^2) (a cylinder rolling on a slope of angle phi0); phi0 is
@@ -156,7 +156,7 @@ def test_moreau_rolls_without_slip_where_static_friction_holds(rule: str) -> Non
 
 
 def test_moreau_restitution_only_for_closing_contacts() -> None:
-    """PHYSICS.md 6.3: sustained sliding along the bore (g = 0, no friction, no flexure, v = 0.3
+    """docs/model.md §6.3: sustained sliding along the bore (g = 0, no friction, no flexure, v = 0.3
     m/s along the wall from the bottom): each step approaches the wall by gamma_A,N ~ -h v^2 /
     delta (centripetal). With v_eps = 1e-3 m/s that approach gets no restitution, the impulse
     stops it, and the gap drifts by -h v^2 / (2 delta) per unit time = -2.25e-5 m/s (to the
@@ -514,7 +514,7 @@ def test_compare_writes_everything(tmp_path: Path) -> None:
             assert key in s, (model, key)
     # the first contact against the flight on the flexure integrated here (oracles.py: the
     # test's own compliance, co-rotated law, DOP853 at rtol 1e-12): 0.0717153 s, 2.9 ms before
-    # the free fall's 0.074632 s (PHYSICS.md 7.1), so the flexure's stiffness shows (E +5 %
+    # the free fall's 0.074632 s (docs/model.md §7.1), so the flexure's stiffness shows (E +5 %
     # moves it by 1.3e-4 s)
     t_c, x_c = oracles.first_contact_of_flight(oracles.Flexure(), q0=(0.01, 0.01, 0.0))
     # event-driven models (CVODE, scene rtol 1e-6): the position error ~ rtol x the path
@@ -525,7 +525,7 @@ def test_compare_writes_everything(tmp_path: Path) -> None:
     for model in ("LN_spheres", "LN_cylinders", "LN_ESDU"):
         t = summary["models"][model]["first_contact_time"]
         assert abs(t - t_c) < tol, (model, t, t_c, tol)
-    # Moreau: the first step whose midpoint gap is <= 0 (PHYSICS.md 6.1) starts within h/2 of
+    # Moreau: the first step whose midpoint gap is <= 0 (docs/model.md §6.1) starts within h/2 of
     # the contact (Verlet's flight error is ~h^2 g, far below h here): one point of the h grid
     h = scene.integrator.moreau_h
     t = summary["models"]["Moreau"]["first_contact_time"]

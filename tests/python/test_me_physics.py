@@ -1,4 +1,4 @@
-"""Model exchange through fmpy with CVode against the analytic oracles of PHYSICS.md section 7 and
+"""Model exchange through fmpy with CVode against the analytic oracles of docs/model.md §7 and
 against the laws of sections 2 and 4 computed independently in the test (tests/python/oracles.py:
 quadrature, scipy's integrators, the explicit direction of the ESDU law)."""
 
@@ -20,7 +20,7 @@ from csfh.runners.fmu import simulate_me
 G = 9.81
 DELTA = 0.20 - 0.18  # R2 - R1 as the FMU computes it (0.02 + 1.7e-17)
 M1, I1 = 10.0, 0.1617  # Table 1
-# PHYSICS.md 7.1: free fall of 0.03 m from q0 = [0, 0.01, 0] to y = -delta
+# docs/model.md §7.1: free fall of 0.03 m from q0 = [0, 0.01, 0] to y = -delta
 T_FIRST_CENTRAL = math.sqrt(2 * 0.03 / G)
 V_FIRST_CENTRAL = math.sqrt(2 * G * 0.03)
 STATES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
@@ -77,7 +77,7 @@ def test_first_central_contact_is_the_free_fall(fmu_path: Path, model_descriptio
 
 def _elastic_part(law: str, reading: str) -> Any:
     """F_el(rho) of the law with the paper preset's materials (E = 210 GPa, nu = 0.3), from
-    PHYSICS.md 4.1-4.6 as written here."""
+    docs/model.md §4.1-4.6 as written here."""
     K_sph, K_cyl = oracles.k_spheres(), oracles.k_cylinders()
     esdu = oracles.Esdu()
     if law in ("LN_spheres", "HuntCrossley", "Flores"):
@@ -104,7 +104,7 @@ def test_first_central_impact_every_law(law: str, reading: str) -> None:
     """The first impact of the central drop (c_r = 0.9): contact duration, largest indentation
     and exit speed against the law's own impact, m rho'' = m g - F_el(rho) max(0, 1 + xi rho' /
     v_imp) from rho' = v_imp, integrated here by scipy at rtol 1e-11 with F_el and xi written
-    from PHYSICS.md 4 (sphere stiffness for Hunt-Crossley and Flores, (pi/4) E* L for the
+    from docs/model.md §4 (sphere stiffness for Hunt-Crossley and Flores, (pi/4) E* L for the
     cylinders, the ESDU law from its explicit direction rho(F)). The FMU runs at rtol 1e-10; the
     two agree to ~1e-8 relative, so 1e-6 is tight: a stiffness off by 1 % moves the duration
     and the indentation by 0.4 %, the exit speed depends on xi."""
@@ -207,7 +207,7 @@ def test_power_laws_force_at_an_indentation(
 
 @pytest.mark.parametrize("E", [100e9, 210e9])
 def test_esdu_law_force_indentation_pairs(make_fmu: Any, vr: dict[str, int], E: float) -> None:
-    """ESDU-78035 (paper Eq. 18, PHYSICS.md 4.5): for forces F from 30 N to 3e5 N the test computes
+    """ESDU-78035 (paper Eq. 18, docs/model.md §4.5): for forces F from 30 N to 3e5 N the test computes
     the indentation rho(F) = a F [ln(F*/F) + 1] (the equation's explicit direction; the FMU
     inverts it), starts the FMU at rest at that indentation (no damping) and reads F_N: reading
     I2 gives F itself, reading I3 the tangent stiffness K_t(F) = 1/(a ln(F*/F)) times rho^1.5
@@ -237,7 +237,7 @@ def test_esdu_law_force_indentation_pairs(make_fmu: Any, vr: dict[str, int], E: 
 
 
 def test_ambrosio_friction_force_at_a_state(make_fmu: Any, vr: dict[str, int]) -> None:
-    """Ambrosio friction (PHYSICS.md 5.1) at the bottom of the bore, indentation 1e-5 m, onset
+    """Ambrosio friction (docs/model.md §5.1) at the bottom of the bore, indentation 1e-5 m, onset
     rate 0.5 m/s: F_T = -f_d c_d(|v_T|) F_N sgn(v_T), c_d = 0 below v0 = 1e-4 m/s, linear up
     to v1 = 1e-2 m/s, 1 above, with v_T of the contact point computed here from the corrected
     arm (3.4): n_c = [0, 1], t_c = [-1, 0], a = -R1 n_c, v_T = -v_x - R1 omega. F_N from the
@@ -287,7 +287,7 @@ def _flexure_instance(make_fmu: Any, vr: dict[str, int], bending_only: bool = Fa
 def test_flexure_static_deflection_holds_under_its_load(make_fmu: Any, vr: dict[str, int]) -> None:
     """Static deflection: at displaced states q (up to 1 cm and 0.2 rad) the test applies the
     load F_ext, M_ext = -Q_e(q) that holds body 1 there, with Q_e from its own compliance
-    (Castigliano by quadrature in global coordinates, bending + axial + shear, PHYSICS.md 2.3)
+    (Castigliano by quadrature in global coordinates, bending + axial + shear, docs/model.md §2.3)
     and the co-rotated law (2.7)-(2.9); the FMU must then be in equilibrium: accelerations
     ~0. The shear term alone moves the stiffness by ~3e-4 relative (the test sizes it), so a
     residual below 1e-9 of the load sees it; round-off is ~1e-13."""
@@ -307,7 +307,7 @@ def test_flexure_static_deflection_holds_under_its_load(make_fmu: Any, vr: dict[
 
 
 def test_flexure_natural_frequencies(make_fmu: Any, vr: dict[str, int]) -> None:
-    """The natural frequencies of body 1 on the flexure (PHYSICS.md 7.7) from the FMU's forces
+    """The natural frequencies of body 1 on the flexure (docs/model.md §7.7) from the FMU's forces
     (central differences of the accelerations at q = 0, step 1e-7: truncation ~1e-14 relative
     for the quadratic co-rotation terms, round-off ~1e-8) against det(K_G - w^2 M) = 0 with the
     test's own compliance: 1e-6 relative. With bending only (flexure.bending_only) they move by
@@ -339,7 +339,7 @@ def test_flexure_natural_frequencies(make_fmu: Any, vr: dict[str, int]) -> None:
 
 
 def test_energy_conserved_elastic_impacts(fmu_path: Path, model_description) -> None:
-    """c_r = 1, no friction, no flexure: Hertz contact is conservative (PHYSICS.md 7.5)."""
+    """c_r = 1, no friction, no flexure: Hertz contact is conservative (docs/model.md §7.5)."""
     result = fmpy.simulate_fmu(
         str(fmu_path),
         fmi_type="ModelExchange",
@@ -361,7 +361,7 @@ def test_energy_conserved_elastic_impacts(fmu_path: Path, model_description) -> 
     )
     assert result["contact.count"][-1] >= 10
     energy = result["energy.total"]
-    # PHYSICS.md 7.5: kinetic (translation and rotation) + gravity at the start
+    # docs/model.md §7.5: kinetic (translation and rotation) + gravity at the start
     E0 = 0.5 * M1 * 0.3**2 + 0.5 * I1 * 0.5**2 + M1 * G * 0.01
     assert energy[0] == pytest.approx(E0, rel=1e-14)
     drift = np.max(np.abs(energy - energy[0])) / energy[0]

@@ -327,7 +327,7 @@ def test_tolerance_study_is_reproducible(tmp_path: Path) -> None:
     # run's sampled R1, R2, h, rho, beta (oracles.py: own compliance, DOP853 at rtol 1e-12).
     # The samples move it by ~1e-4 s; LN_cylinders (CVODE, rtol 1e-6) agrees to ~4e-8 s (the
     # position error ~ rtol x the 0.027 m path, over the 0.7 m/s approach): 4e-7 s; Moreau's
-    # first contact step starts within h/2 of it (PHYSICS.md 6.1)
+    # first contact step starts within h/2 of it (docs/model.md §6.1)
     samples = ja["samples"]
     fc = ja["models"]["LN_cylinders"]["values"]["first_contact"]
     fc_moreau = ja["models"]["Moreau"]["values"]["first_contact"]

@@ -1,4 +1,4 @@
-"""The two presets of PHYSICS.md section 9.
+"""The two presets of docs/model.md §9.
 
 `paper` (the FMU's start values) replicates the paper's figures; `consistent` is dimensionally and
 geometrically sound physics. Every item is an ordinary parameter, so a scene can override any of
@@ -14,7 +14,7 @@ class Preset:
     name: str
     description: str
     parameters: dict[str, float | int | bool | str] = field(default_factory=dict)
-    stick_rule: str = "paper"  # Moreau: which coefficient decides sticking (PHYSICS.md 6.4)
+    stick_rule: str = "paper"  # Moreau: which coefficient decides sticking (docs/model.md §6.4)
 
 
 PRESETS: dict[str, Preset] = {

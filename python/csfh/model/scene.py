@@ -19,7 +19,7 @@ it leaves these limits (so that no scene exhausts the memory or runs for hours b
 
     name = "csfh"
     description = "..."
-    preset = "paper"            # or "consistent" (PHYSICS.md section 9)
+    preset = "paper"            # or "consistent" (docs/model.md §9)
     stop_time = 1.0             # s
     models = ["LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau"]   # for `csfh compare`
 

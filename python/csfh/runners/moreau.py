@@ -1,4 +1,4 @@
-"""The Moreau midpoint time stepper (PHYSICS.md section 6), run in the C core through ctypes.
+"""The Moreau midpoint time stepper (docs/model.md §6), run in the C core through ctypes.
 
 Why C: one step is ~100 floating-point operations; in C through the same core library as the FMU
 a step costs well under a microsecond (see benchmarks/), the smooth forces are by construction the

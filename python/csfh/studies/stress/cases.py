@@ -1,4 +1,4 @@
-"""The stress cases (PHYSICS.md section 8): contact stiffness, impact speed, restitution,
+"""The stress cases (docs/model.md §8): contact stiffness, impact speed, restitution,
 clearance, a grazing impact, resting contact, high friction, stick-slip and an eccentric mass
 centre, each with its scene, the runs (model, integrator) it applies to, and its check."""
 
@@ -57,7 +57,7 @@ def _impact_scene(name: str, v: float, stop: float, params: dict[str, Any]) -> S
 
 
 PAPER_CONTACT_TIMES = {"LN_spheres": 4.6e-4, "LN_cylinders": 1.56e-3, "LN_ESDU": 2.0e-3}
-"""Contact durations of the first impact of the paper's scenes (PHYSICS.md 7.3, 4.6), s."""
+"""Contact durations of the first impact of the paper's scenes (docs/model.md §7.3, 4.6), s."""
 
 
 def build_cases(quick: bool = False) -> list[Case]:
@@ -242,7 +242,7 @@ def build_cases(quick: bool = False) -> list[Case]:
             quick=True,
         )
     )
-    # --- stick-slip f_a != f_d (PHYSICS.md 7.6)
+    # --- stick-slip f_a != f_d (docs/model.md §7.6)
     sc = scene_from_dict(
         {
             "name": "stickslip",
@@ -257,7 +257,7 @@ def build_cases(quick: bool = False) -> list[Case]:
             "stick-slip f_a = 0.11, f_d = 0.055",
             "friction",
             "first asymmetric impact in the band f_d < |Lambda_T|/Lambda_N < f_a: "
-            "omega after it (PHYSICS.md 7.6: LN_spheres 0.7467, LN_cylinders 0.7561, "
+            "omega after it (docs/model.md §7.6: LN_spheres 0.7467, LN_cylinders 0.7561, "
             "Moreau paper rule 1.3567, memory rule 0.7376)",
             sc,
             _runs(("LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau")),

@@ -98,7 +98,7 @@ def clearance_check(delta: float) -> Check:
             if not ok:
                 why = (
                     f"limit: penetration {pen:.3g} m > {bound:.3g} m: the midpoint scheme "
-                    f"needs h << delta/|v_T| = {delta / 0.05:.2g} s (PHYSICS.md 8)"
+                    f"needs h << delta/|v_T| = {delta / 0.05:.2g} s (docs/model.md §8)"
                 )
             return ok, why, {"penetration": pen}
         bound = 3 * hertz_max_indentation(4.7353e10 if model == "LN_spheres" else 2.27e9, v)
@@ -190,4 +190,4 @@ def stickslip_check(tr: Trajectory, model: str, integ: str) -> tuple[bool, str, 
         omega = float(tr.table["omega"][min(i, len(tr.t) - 1)])
         tol = 2e-3 if integ != "RK4" else 0.05
     ok = abs(omega - expected) <= tol * expected
-    return ok, f"omega after the first contact {omega:.4f} rad/s (PHYSICS.md 7.6: {expected})", {}
+    return ok, f"omega after the first contact {omega:.4f} rad/s (docs/model.md §7.6: {expected})", {}

@@ -1,5 +1,5 @@
 """The stress suite's test body and integrator settings, and the independent predictions its runs
-are checked against (PHYSICS.md section 7): Hertz's undamped impact and the effective
+are checked against (docs/model.md §7): Hertz's undamped impact and the effective
 restitution of each damped law from the scaled impact ODE, integrated here with scipy."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ DELTA = 0.02
 RK4_H0, RK4_TOL = 2e-4, 1e-4
 MOREAU_H = 1e-5
 RTOL = 1e-10
-XI = {  # PHYSICS.md 4.4
+XI = {  # docs/model.md §4.4
     "LN_spheres": lambda cr: 0.75 * (1 - cr * cr),
     "LN_cylinders": lambda cr: 0.75 * (1 - cr * cr),
     "LN_ESDU": lambda cr: 0.75 * (1 - cr * cr),
@@ -23,19 +23,19 @@ XI = {  # PHYSICS.md 4.4
 
 
 def hertz_max_indentation(K: float, v: float, n: float = 1.5, m: float = M1) -> float:
-    """Undamped Hertz impact: rho_max = ((n + 1) m v^2 / (2 K))^(1/(n+1)) (PHYSICS.md 7.2)."""
+    """Undamped Hertz impact: rho_max = ((n + 1) m v^2 / (2 K))^(1/(n+1)) (docs/model.md §7.2)."""
     return ((n + 1) * m * v * v / (2 * K)) ** (1 / (n + 1))
 
 
 def hertz_contact_time(K: float, v: float) -> float:
-    """t_c = 2.943276 rho_max / v for n = 1.5 (PHYSICS.md 7.2)."""
+    """t_c = 2.943276 rho_max / v for n = 1.5 (docs/model.md §7.2)."""
     return 2.943276 * hertz_max_indentation(K, v) / v
 
 
 @cache
 def effective_restitution(law: str, cr: float, n: float = 1.5, rtol: float = 1e-12) -> float:
     """e_eff of F = K rho^n (1 + xi rhodot/rhodot0), clamped >= 0, from the parameter-free
-    scaled impact X'' = -X^n max(0, 1 + xi X'), X(0) = 0, X'(0) = 1 (PHYSICS.md 7.3), integrated
+    scaled impact X'' = -X^n max(0, 1 + xi X'), X(0) = 0, X'(0) = 1 (docs/model.md §7.3), integrated
     here with scipy (independent of the FMU) to the relative tolerance `rtol`."""
     from scipy.integrate import solve_ivp
 

@@ -1,4 +1,4 @@
-"""Stiff and extreme cases (PHYSICS.md section 8): each case runs with every applicable model and
+"""Stiff and extreme cases (docs/model.md §8): each case runs with every applicable model and
 integrator, and each run gets a verdict with its reason.
 
 Verdicts:

@@ -29,7 +29,7 @@ def rest_shift(scene: Scene, p: SweepParameter, direction: int) -> tuple[float, 
     """How far the paper's Eq. (4) moves the rest position of G1 when the step changes rho or
     beta with the root C2 and the attachment s-bar fixed: r0 = f + h - s-bar, h the chord from
     the root to the tip, h = rho [e(phi_root + beta) - e(phi_root)] in our layout (the paper's
-    Eq. (2) rotated by +90 deg, PHYSICS.md 1.2)."""
+    Eq. (2) rotated by +90 deg, docs/model.md §1.2)."""
     nom = nominal_values(scene, ["flexure.rho", "flexure.beta", "flexure.phi_root"])
 
     def chord(rho: float, beta: float) -> np.ndarray:
