@@ -101,7 +101,8 @@ int main(int argc, char **argv)
         char type[16];
         if (imp_lookup(&imp, imp.run.opt.watch, &watch_vr, type) != 0 ||
             (strcmp(type, "Integer") != 0 && strcmp(type, "Enumeration") != 0)) {
-            fprintf(stderr, PROGRAM ": --watch: %s is not an Integer variable\n", imp.run.opt.watch);
+            fprintf(stderr, PROGRAM ": --watch: %s is not an Integer variable\n",
+                    imp.run.opt.watch);
             return 2;
         }
         watching = 1;

@@ -151,7 +151,7 @@ int main(int argc, char **argv)
         imp.api.UpdateDiscreteStates == NULL ||
         (serialize && (imp.api.SerializedFMUStateSize == NULL ||
                        imp.api.SerializeFMUState == NULL || imp.api.DeserializeFMUState == NULL))) {
-        fprintf(stderr, PROGRAM ": the FMU does not export the FMU state or Event Mode functions\n");
+        fprintf(stderr, PROGRAM ": the FMU lacks the FMU state or Event Mode functions\n");
         return 2;
     }
     imp.run.opt.stop = t_stop;

@@ -39,7 +39,8 @@ static const char *find_variable(const imp_run_t *run, const char *key, const ch
         const size_t n_types = sizeof(variable_types) / sizeof(variable_types[0]);
         for (size_t i = 0; i < n_types; i++) {
             const size_t n = strlen(variable_types[i]);
-            if (strncmp(p + 1, variable_types[i], n) != 0 || (p[n + 1] != ' ' && p[n + 1] != '\n')) {
+            const char after = p[n + 1];
+            if (strncmp(p + 1, variable_types[i], n) != 0 || (after != ' ' && after != '\n')) {
                 continue;
             }
             if (imp_xml_attribute(p, key, text, sizeof(text)) == 0 && strcmp(text, value) == 0) {

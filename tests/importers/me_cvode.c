@@ -63,7 +63,8 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *g, void *user_data)
     rhs_data_t *d = (rhs_data_t *)user_data;
     importer_t *imp = d->imp;
     if (set_time_state(imp, t, y) != 0 ||
-        imp->api.GetEventIndicators(imp->c, g, (size_t)imp->run.md.n_event_indicators) > fmi2Warning) {
+        imp->api.GetEventIndicators(imp->c, g, (size_t)imp->run.md.n_event_indicators) >
+            fmi2Warning) {
         d->failed = 1;
         imp_fail(&imp->run, "the FMU failed to evaluate the event indicators at t = %.17g", t);
         return -1;
@@ -104,7 +105,8 @@ int main(int argc, char **argv)
     }
     const double rtol = isfinite(imp.run.opt.rtol) ? imp.run.opt.rtol : imp.run.md.tolerance;
     const double t_stop = isfinite(imp.run.opt.stop) ? imp.run.opt.stop : imp.run.md.stop_time;
-    const double dt_out = isfinite(imp.run.opt.interval) ? imp.run.opt.interval : imp.run.md.step_size;
+    const double dt_out =
+        isfinite(imp.run.opt.interval) ? imp.run.opt.interval : imp.run.md.step_size;
     if (!(rtol > 0) || !isfinite(t_stop) || !(dt_out > 0)) {
         fprintf(stderr, PROGRAM ": no tolerance, stop time or output interval (give --rtol, "
                         "--stop, --interval or a DefaultExperiment)\n");
