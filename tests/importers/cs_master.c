@@ -12,7 +12,7 @@
  *   --mode memory     (default) the saved states stay in the FMU's memory
  *   --mode serialize  every saved state goes through fmi2SerializeFMUstate and
  *                     fmi2DeSerializeFMUstate before it is restored
- * The CSV gets every accepted communication point. Common options: fmi2_import.h. */
+ * The CSV gets every accepted communication point. Common options: import_common.h. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -32,14 +32,14 @@ static int save(saved_t *s)
 {
     importer_t *imp = s->imp;
     if (imp->api.GetFMUstate(imp->c, &s->state) > fmi2Warning) {
-        return imp_fail(imp, "fmi2GetFMUstate failed at t = %.17g", imp->t_reached), -1;
+        return imp_fail(&imp->run, "fmi2GetFMUstate failed at t = %.17g", imp->run.t_reached), -1;
     }
     if (!s->serialize) {
         return 0;
     }
     size_t size = 0;
     if (imp->api.SerializedFMUstateSize(imp->c, s->state, &size) > fmi2Warning) {
-        return imp_fail(imp, "fmi2SerializedFMUstateSize failed"), -1;
+        return imp_fail(&imp->run, "fmi2SerializedFMUstateSize failed"), -1;
     }
     fmi2Byte *bytes = (fmi2Byte *)malloc(size);
     fmi2FMUstate copy = NULL;
@@ -48,7 +48,7 @@ static int save(saved_t *s)
              imp->api.DeSerializeFMUstate(imp->c, bytes, size, &copy) <= fmi2Warning;
     free(bytes);
     if (!ok) {
-        return imp_fail(imp, "FMU state serialization round trip failed"), -1;
+        return imp_fail(&imp->run, "FMU state serialization round trip failed"), -1;
     }
     s->state = copy;
     return 0;
@@ -57,9 +57,9 @@ static int save(saved_t *s)
 static int restore(saved_t *s)
 {
     if (s->imp->api.SetFMUstate(s->imp->c, s->state) > fmi2Warning) {
-        return imp_fail(s->imp, "fmi2SetFMUstate failed"), -1;
+        return imp_fail(&s->imp->run, "fmi2SetFMUstate failed"), -1;
     }
-    s->imp->rollbacks++;
+    s->imp->run.rollbacks++;
     return 0;
 }
 
@@ -75,15 +75,15 @@ int main(int argc, char **argv)
 {
     importer_t imp;
     imp_open(&imp, argc, argv, fmi2CoSimulation, PROGRAM);
-    const int serialize = imp.opt.mode != NULL && strcmp(imp.opt.mode, "serialize") == 0;
-    if (imp.opt.mode != NULL && !serialize && strcmp(imp.opt.mode, "memory") != 0) {
-        fprintf(stderr, PROGRAM ": --mode must be memory or serialize, got %s\n", imp.opt.mode);
+    const int serialize = imp.run.opt.mode != NULL && strcmp(imp.run.opt.mode, "serialize") == 0;
+    if (imp.run.opt.mode != NULL && !serialize && strcmp(imp.run.opt.mode, "memory") != 0) {
+        fprintf(stderr, PROGRAM ": --mode must be memory or serialize, got %s\n", imp.run.opt.mode);
         return 2;
     }
-    const double h_max = isfinite(imp.opt.step) ? imp.opt.step : imp.md.step_size;
+    const double h_max = isfinite(imp.run.opt.step) ? imp.run.opt.step : imp.run.md.step_size;
     const double h_min = h_max / 64.0;
-    const double t_stop = isfinite(imp.opt.stop) ? imp.opt.stop : imp.md.stop_time;
-    const double rtol = isfinite(imp.opt.rtol) ? imp.opt.rtol : imp.md.tolerance;
+    const double t_stop = isfinite(imp.run.opt.stop) ? imp.run.opt.stop : imp.run.md.stop_time;
+    const double rtol = isfinite(imp.run.opt.rtol) ? imp.run.opt.rtol : imp.run.md.tolerance;
     if (!(h_max > 0) || !isfinite(t_stop)) {
         fprintf(stderr, PROGRAM ": no step size or stop time\n");
         return 2;
@@ -93,15 +93,16 @@ int main(int argc, char **argv)
         fprintf(stderr, PROGRAM ": the FMU does not export the FMU state functions\n");
         return 2;
     }
-    imp.opt.stop = t_stop;
+    imp.run.opt.stop = t_stop;
     /* the watched Integer (optional): a change during a step asks for a smaller step */
     fmi2ValueReference watch_vr = 0;
     int watching = 0;
-    if (imp.opt.watch != NULL) {
+    if (imp.run.opt.watch != NULL) {
         char type[16];
-        if (imp_lookup(&imp, imp.opt.watch, &watch_vr, type) != 0 ||
+        if (imp_lookup(&imp, imp.run.opt.watch, &watch_vr, type) != 0 ||
             (strcmp(type, "Integer") != 0 && strcmp(type, "Enumeration") != 0)) {
-            fprintf(stderr, PROGRAM ": --watch: %s is not an Integer variable\n", imp.opt.watch);
+            fprintf(stderr, PROGRAM ": --watch: %s is not an Integer variable\n",
+                    imp.run.opt.watch);
             return 2;
         }
         watching = 1;
@@ -110,31 +111,31 @@ int main(int argc, char **argv)
     if (imp_initialize(&imp, fmi2CoSimulation, rtol) > fmi2Warning) {
         return imp_close(&imp);
     }
-    double t = imp.t_reached, h = h_max;
+    double t = imp.run.t_reached, h = h_max;
     imp_record(&imp, t, 1);
     fmi2Integer watched = 0, now = 0;
     if (watching && imp.api.GetInteger(imp.c, &watch_vr, 1, &watched) > fmi2Warning) {
-        imp_fail(&imp, "fmi2GetInteger of the watched variable failed");
+        imp_fail(&imp.run, "fmi2GetInteger of the watched variable failed");
     }
     long accepted = 0;
     fmi2Real first[IMP_MAX_OUTPUTS], again[IMP_MAX_OUTPUTS];
-    const size_t n_out = (size_t)imp.opt.n_outputs;
-    while (imp.status[0] == '\0' && t < t_stop * (1 - 1e-15)) {
-        if (imp.steps >= imp.opt.max_steps) {
-            imp_fail(&imp, "budget: more than %ld steps", imp.opt.max_steps);
+    const size_t n_out = (size_t)imp.run.opt.n_outputs;
+    while (imp.run.status[0] == '\0' && t < t_stop * (1 - 1e-15)) {
+        if (imp.run.steps >= imp.run.opt.max_steps) {
+            imp_fail(&imp.run, "budget: more than %ld steps", imp.run.opt.max_steps);
             break;
         }
         const double step = t + h > t_stop ? t_stop - t : h;
         if (save(&saved) != 0) {
             break;
         }
-        imp.steps++;
+        imp.run.steps++;
         if (imp.api.DoStep(imp.c, t, step, fmi2True) > fmi2Warning) {
-            imp_fail(&imp, "fmi2DoStep(%.17g, %.17g) failed", t, step);
+            imp_fail(&imp.run, "fmi2DoStep(%.17g, %.17g) failed", t, step);
             break;
         }
         if (watching && imp.api.GetInteger(imp.c, &watch_vr, 1, &now) > fmi2Warning) {
-            imp_fail(&imp, "fmi2GetInteger of the watched variable failed");
+            imp_fail(&imp.run, "fmi2GetInteger of the watched variable failed");
             break;
         }
         if (watching && now != watched && step > h_min * (1 + 1e-12)) {
@@ -147,25 +148,25 @@ int main(int argc, char **argv)
         }
         if (++accepted % REPLAY_EVERY == 0) {
             /* the same step once more from the saved state: bitwise the same outputs */
-            if (imp.api.GetReal(imp.c, imp.opt.output_vrs, n_out, first) > fmi2Warning ||
+            if (imp.api.GetReal(imp.c, imp.run.opt.output_vrs, n_out, first) > fmi2Warning ||
                 restore(&saved) != 0 ||
                 imp.api.DoStep(imp.c, t, step, fmi2True) > fmi2Warning ||
-                imp.api.GetReal(imp.c, imp.opt.output_vrs, n_out, again) > fmi2Warning) {
-                imp_fail(&imp, "the replay of the step at t = %.17g failed", t);
+                imp.api.GetReal(imp.c, imp.run.opt.output_vrs, n_out, again) > fmi2Warning) {
+                imp_fail(&imp.run, "the replay of the step at t = %.17g failed", t);
                 break;
             }
             if (memcmp(first, again, n_out * sizeof(fmi2Real)) != 0) {
-                imp_fail(&imp, "replay: the step from t = %.17g differs after a rollback", t);
+                imp_fail(&imp.run, "replay: the step from t = %.17g differs after a rollback", t);
                 break;
             }
         }
         release(&saved);
         if (watching && now != watched) {
-            imp_event(&imp, t + step, "watched-change");
+            imp_event(&imp.run, t + step, "watched-change");
         }
         watched = now;
         t = step == t_stop - t ? t_stop : t + step;
-        imp.t_reached = t;
+        imp.run.t_reached = t;
         if (imp_record(&imp, t, 1) > fmi2Warning) {
             break;
         }

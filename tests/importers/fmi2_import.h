@@ -1,42 +1,15 @@
-/* Shared part of the conformance importers (tests/importers/): load an unzipped FMI 2.0 FMU,
- * read what an importer needs from its modelDescription.xml, parse the command line, instantiate
- * and initialise, write results.
- *
- * Portable C11: the only platform-specific code is the shared-library shim in fmi2_import.c
- * (dlopen / LoadLibrary); everything else is the C standard library, so the importers build for
- * linux64 and win64 alike.
- *
- * Common command line of every importer:
- *
- *   IMPORTER FMU_DIR [options] [NAME=VALUE ...]
- *     FMU_DIR           the unzipped FMU (modelDescription.xml, binaries/<platform>/)
- *     NAME=VALUE        start values by variable name (Real, Integer/Enumeration as a number,
- *                       Boolean as true/false/1/0), set in initialization mode
- *     --stop T          stop time (default: DefaultExperiment stopTime)
- *     --rtol R          relative tolerance (default: DefaultExperiment tolerance)
- *     --step H          step size (default: DefaultExperiment stepSize)
- *     --interval DT     output interval (default: DefaultExperiment stepSize)
- *     --outputs A,B,..  Real variables written to the CSV (default: the states)
- *     --out FILE        CSV: time and the outputs at every output point
- *     --events FILE     CSV: time and kind (onset/release/event) of every event
- *     --summary FILE    key = value lines: status, counts, extremes of every output over every
- *                       accepted step
- *     --mode M          importer-specific (me_cvode: flags | always; cs_master: memory |
- *                       serialize)
- *     --watch NAME      cs_master: the Integer variable whose change asks for a smaller step
- *     --max-steps N     give up (status "budget") after N steps (default 10000000)
- *     --verbose         log every FMU message
- * Exit status: 0 completed, 1 the FMU or the integrator failed (the summary says where), 2 bad
- * command line or FMU directory. */
+/* The FMI 2.0 loader of the conformance importers (tests/importers/): load an unzipped FMI 2.0
+ * FMU, read what an importer needs from its modelDescription.xml, instantiate and initialise,
+ * record the outputs. The version-independent part (command line, XML scanning, shared
+ * libraries, CSV and summary files) is import_common.h, which documents the command line common
+ * to every importer. */
 #ifndef CSFH_FMI2_IMPORT_H
 #define CSFH_FMI2_IMPORT_H
 
 #include <stdio.h>
 
 #include "fmi2FunctionTypes.h"
-
-#define IMP_MAX_OUTPUTS 32
-#define IMP_MAX_STARTS 64
+#include "import_common.h"
 
 typedef struct {
     fmi2InstantiateTYPE *Instantiate;
@@ -72,44 +45,11 @@ typedef struct {
     fmi2DoStepTYPE *DoStep;
 } imp_api_t;
 
-/* What the importers read from modelDescription.xml. */
 typedef struct {
-    char guid[128];
-    char model_identifier[128];
-    int n_states;           /* Real variables with a derivative attribute */
-    int n_event_indicators;
-    double start_time, stop_time, tolerance, step_size; /* DefaultExperiment (NAN: absent) */
-    char *xml;              /* the whole file, kept for variable look-ups */
-} imp_model_t;
-
-typedef struct {
-    const char *fmu_dir;
-    double stop, rtol, step, interval; /* NAN: from the DefaultExperiment */
-    const char *mode;
-    const char *watch;
-    const char *out_path, *events_path, *summary_path;
-    long max_steps;
-    int verbose;
-    int n_outputs;
-    const char *output_names[IMP_MAX_OUTPUTS];
-    fmi2ValueReference output_vrs[IMP_MAX_OUTPUTS];
-    int n_starts;
-    const char *starts[IMP_MAX_STARTS]; /* "NAME=VALUE" */
-} imp_options_t;
-
-typedef struct {
+    imp_run_t run; /* options, model description, results (import_common.h) */
     imp_api_t api;
-    imp_model_t md;
-    imp_options_t opt;
-    void *library;
     fmi2CallbackFunctions callbacks;
     fmi2Component c;
-    FILE *out, *events;
-    /* summary */
-    long steps, events_count, reinits, rollbacks;
-    double t_reached;
-    double out_min[IMP_MAX_OUTPUTS], out_max[IMP_MAX_OUTPUTS];
-    char status[256];
 } importer_t;
 
 /* Parse the command line and load the FMU (modelDescription.xml and the binary); exits with
@@ -127,17 +67,7 @@ fmi2Status imp_initialize(importer_t *imp, fmi2Type kind, double tolerance);
 /* Record the outputs at time t: to the CSV when `write`, and into the extremes always. */
 fmi2Status imp_record(importer_t *imp, double t, int write);
 
-/* One event line. */
-void imp_event(importer_t *imp, double t, const char *kind);
-
 /* Write the summary, free everything; returns the exit status (0 if status is "completed"). */
 int imp_close(importer_t *imp);
-
-/* Set the summary status (printf-style) unless one is already set; returns 1 for chaining. */
-int imp_fail(importer_t *imp, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
 
 #endif

@@ -11,7 +11,7 @@
  * interpolates; the only stop time is the end of the run), relative tolerance --rtol (default: the
  * DefaultExperiment tolerance), absolute tolerance rtol x the nominal of each state. Output
  * points every --interval (default: the DefaultExperiment stepSize); events are written to
- * --events and the state before each event to --out as well. Common options: fmi2_import.h. */
+ * --events and the state before each event to --out as well. Common options: import_common.h. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,8 +36,8 @@ static int set_time_state(importer_t *imp, double t, N_Vector y)
     if (imp->api.SetTime(imp->c, t) > fmi2Warning) {
         return -1;
     }
-    if (imp->md.n_states > 0 &&
-        imp->api.SetContinuousStates(imp->c, N_VGetArrayPointer(y), (size_t)imp->md.n_states) >
+    if (imp->run.md.n_states > 0 &&
+        imp->api.SetContinuousStates(imp->c, N_VGetArrayPointer(y), (size_t)imp->run.md.n_states) >
             fmi2Warning) {
         return -1;
     }
@@ -49,10 +49,10 @@ static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
     rhs_data_t *d = (rhs_data_t *)user_data;
     importer_t *imp = d->imp;
     if (set_time_state(imp, t, y) != 0 ||
-        imp->api.GetDerivatives(imp->c, N_VGetArrayPointer(ydot), (size_t)imp->md.n_states) >
+        imp->api.GetDerivatives(imp->c, N_VGetArrayPointer(ydot), (size_t)imp->run.md.n_states) >
             fmi2Warning) {
         d->failed = 1;
-        imp_fail(imp, "the FMU failed to evaluate the derivatives at t = %.17g", t);
+        imp_fail(&imp->run, "the FMU failed to evaluate the derivatives at t = %.17g", t);
         return -1;
     }
     return 0;
@@ -63,9 +63,10 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *g, void *user_data)
     rhs_data_t *d = (rhs_data_t *)user_data;
     importer_t *imp = d->imp;
     if (set_time_state(imp, t, y) != 0 ||
-        imp->api.GetEventIndicators(imp->c, g, (size_t)imp->md.n_event_indicators) > fmi2Warning) {
+        imp->api.GetEventIndicators(imp->c, g, (size_t)imp->run.md.n_event_indicators) >
+            fmi2Warning) {
         d->failed = 1;
-        imp_fail(imp, "the FMU failed to evaluate the event indicators at t = %.17g", t);
+        imp_fail(&imp->run, "the FMU failed to evaluate the event indicators at t = %.17g", t);
         return -1;
     }
     return 0;
@@ -97,21 +98,22 @@ int main(int argc, char **argv)
 {
     importer_t imp;
     imp_open(&imp, argc, argv, fmi2ModelExchange, PROGRAM);
-    const int always = imp.opt.mode != NULL && strcmp(imp.opt.mode, "always") == 0;
-    if (imp.opt.mode != NULL && !always && strcmp(imp.opt.mode, "flags") != 0) {
-        fprintf(stderr, PROGRAM ": --mode must be flags or always, got %s\n", imp.opt.mode);
+    const int always = imp.run.opt.mode != NULL && strcmp(imp.run.opt.mode, "always") == 0;
+    if (imp.run.opt.mode != NULL && !always && strcmp(imp.run.opt.mode, "flags") != 0) {
+        fprintf(stderr, PROGRAM ": --mode must be flags or always, got %s\n", imp.run.opt.mode);
         return 2;
     }
-    const double rtol = isfinite(imp.opt.rtol) ? imp.opt.rtol : imp.md.tolerance;
-    const double t_stop = isfinite(imp.opt.stop) ? imp.opt.stop : imp.md.stop_time;
-    const double dt_out = isfinite(imp.opt.interval) ? imp.opt.interval : imp.md.step_size;
+    const double rtol = isfinite(imp.run.opt.rtol) ? imp.run.opt.rtol : imp.run.md.tolerance;
+    const double t_stop = isfinite(imp.run.opt.stop) ? imp.run.opt.stop : imp.run.md.stop_time;
+    const double dt_out =
+        isfinite(imp.run.opt.interval) ? imp.run.opt.interval : imp.run.md.step_size;
     if (!(rtol > 0) || !isfinite(t_stop) || !(dt_out > 0)) {
         fprintf(stderr, PROGRAM ": no tolerance, stop time or output interval (give --rtol, "
                         "--stop, --interval or a DefaultExperiment)\n");
         return 2;
     }
-    imp.opt.stop = t_stop;
-    const int nx = imp.md.n_states, nz = imp.md.n_event_indicators;
+    imp.run.opt.stop = t_stop;
+    const int nx = imp.run.md.n_states, nz = imp.run.md.n_event_indicators;
     SUNContext ctx = NULL;
     void *mem = NULL;
     N_Vector y = NULL, atol = NULL;
@@ -121,17 +123,17 @@ int main(int argc, char **argv)
     int flag = 0;
 
     if (nx < 1 || imp_initialize(&imp, fmi2ModelExchange, rtol) > fmi2Warning) {
-        imp_fail(&imp, "initialization failed (or the FMU has no states)");
+        imp_fail(&imp.run, "initialization failed (or the FMU has no states)");
         goto done;
     }
     int r = event_iteration(&imp); /* the event iteration of the initialization */
     if (r < 0) {
-        imp_fail(&imp, "the initial event iteration failed");
+        imp_fail(&imp.run, "the initial event iteration failed");
         goto done;
     }
-    double t = imp.t_reached;
+    double t = imp.run.t_reached;
     if (SUNContext_Create(NULL, &ctx) != 0) {
-        imp_fail(&imp, "SUNContext_Create failed");
+        imp_fail(&imp.run, "SUNContext_Create failed");
         goto done;
     }
     y = N_VNew_Serial(nx, ctx);
@@ -140,13 +142,13 @@ int main(int argc, char **argv)
     LS = SUNLinSol_Dense(y, J, ctx);
     mem = CVodeCreate(CV_BDF, ctx);
     if (y == NULL || atol == NULL || J == NULL || LS == NULL || mem == NULL) {
-        imp_fail(&imp, "cannot allocate CVODE");
+        imp_fail(&imp.run, "cannot allocate CVODE");
         goto done;
     }
     double *a = N_VGetArrayPointer(atol);
     if (imp.api.GetContinuousStates(imp.c, N_VGetArrayPointer(y), (size_t)nx) > fmi2Warning ||
         imp.api.GetNominalsOfContinuousStates(imp.c, a, (size_t)nx) > fmi2Warning) {
-        imp_fail(&imp, "cannot read the states or their nominals");
+        imp_fail(&imp.run, "cannot read the states or their nominals");
         goto done;
     }
     for (int i = 0; i < nx; i++) {
@@ -155,7 +157,7 @@ int main(int argc, char **argv)
     if (CVodeInit(mem, rhs, t, y) < 0 || CVodeSetUserData(mem, &data) < 0 ||
         CVodeSVtolerances(mem, rtol, atol) < 0 || CVodeSetLinearSolver(mem, LS, J) < 0 ||
         CVodeSetMaxNumSteps(mem, 1000000) < 0 || (nz > 0 && CVodeRootInit(mem, nz, roots) < 0)) {
-        imp_fail(&imp, "CVODE setup failed");
+        imp_fail(&imp.run, "CVODE setup failed");
         goto done;
     }
     CVodeSetStopTime(mem, t_stop); /* no stop at the output points: CVODE interpolates there */
@@ -171,49 +173,49 @@ int main(int argc, char **argv)
         long nst = 0;
         CVodeGetNumSteps(mem, &nst);
         if (flag < 0 || data.failed) {
-            imp_fail(&imp, "CVode failed with flag %d at t = %.17g", flag, t);
+            imp_fail(&imp.run, "CVode failed with flag %d at t = %.17g", flag, t);
             break;
         }
         if (set_time_state(&imp, t, y) != 0) {
-            imp_fail(&imp, "cannot set the state at t = %.17g", t);
+            imp_fail(&imp.run, "cannot set the state at t = %.17g", t);
             break;
         }
-        imp.t_reached = t;
+        imp.run.t_reached = t;
         fmi2Boolean enter = fmi2False, terminate = fmi2False;
         if (imp.api.CompletedIntegratorStep(imp.c, fmi2True, &enter, &terminate) > fmi2Warning ||
             terminate) {
-            imp_fail(&imp, "fmi2CompletedIntegratorStep failed or asked to terminate");
+            imp_fail(&imp.run, "fmi2CompletedIntegratorStep failed or asked to terminate");
             break;
         }
         if (flag == CV_ROOT_RETURN || enter) {
             imp_record(&imp, t, 1); /* the state at the event, before it */
             r = event_iteration(&imp);
             if (r < 0) {
-                imp_fail(&imp, "the event iteration failed at t = %.17g", t);
+                imp_fail(&imp.run, "the event iteration failed at t = %.17g", t);
                 break;
             }
-            imp_event(&imp, t, r ? "reinit-requested" : "event");
+            imp_event(&imp.run, t, r ? "reinit-requested" : "event");
             if (r || always) {
                 if (imp.api.GetContinuousStates(imp.c, N_VGetArrayPointer(y), (size_t)nx) >
                         fmi2Warning ||
                     CVodeReInit(mem, t, y) < 0) {
-                    imp_fail(&imp, "re-initialisation failed at t = %.17g", t);
+                    imp_fail(&imp.run, "re-initialisation failed at t = %.17g", t);
                     break;
                 }
-                imp.reinits++;
+                imp.run.reinits++;
             }
         } else {
             imp_record(&imp, t, 1);
             k_out++;
         }
-        if (imp.steps + nst > imp.opt.max_steps) {
-            imp_fail(&imp, "budget: more than %ld steps", imp.opt.max_steps);
+        if (imp.run.steps + nst > imp.run.opt.max_steps) {
+            imp_fail(&imp.run, "budget: more than %ld steps", imp.run.opt.max_steps);
             break;
         }
         if (flag == CV_ROOT_RETURN && (r || always)) {
-            imp.steps += nst; /* CVodeReInit restarts the count */
+            imp.run.steps += nst; /* CVodeReInit restarts the count */
         } else if (t >= t_stop) {
-            imp.steps += nst;
+            imp.run.steps += nst;
         }
     }
 done:

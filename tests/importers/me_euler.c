@@ -8,7 +8,7 @@
  * the event iteration the states are read back when the FMU reports a change, and the indicators
  * are read again. Every step is recorded into the extremes of the summary (so a penetration
  * between output points is seen); the CSV gets the output points every --interval (default: the
- * stepSize) and the state before each event. Common options: fmi2_import.h. */
+ * stepSize) and the state before each event. Common options: import_common.h. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,44 +43,44 @@ int main(int argc, char **argv)
 {
     importer_t imp;
     imp_open(&imp, argc, argv, fmi2ModelExchange, PROGRAM);
-    const double h = isfinite(imp.opt.step) ? imp.opt.step : imp.md.step_size;
-    const double t_stop = isfinite(imp.opt.stop) ? imp.opt.stop : imp.md.stop_time;
-    const double dt_out = isfinite(imp.opt.interval) ? imp.opt.interval : h;
+    const double h = isfinite(imp.run.opt.step) ? imp.run.opt.step : imp.run.md.step_size;
+    const double t_stop = isfinite(imp.run.opt.stop) ? imp.run.opt.stop : imp.run.md.stop_time;
+    const double dt_out = isfinite(imp.run.opt.interval) ? imp.run.opt.interval : h;
     if (!(h > 0) || !isfinite(t_stop) || !(dt_out > 0)) {
         fprintf(stderr, PROGRAM ": no step size or stop time (give --step and --stop, or a "
                         "DefaultExperiment with stepSize and stopTime)\n");
         return 2;
     }
-    imp.opt.stop = t_stop;
-    const int nx = imp.md.n_states, nz = imp.md.n_event_indicators;
+    imp.run.opt.stop = t_stop;
+    const int nx = imp.run.md.n_states, nz = imp.run.md.n_event_indicators;
     double x[MAX_STATES], dx[MAX_STATES], z[MAX_INDICATORS], z_prev[MAX_INDICATORS];
     if (nx < 1 || nx > MAX_STATES || nz > MAX_INDICATORS) {
         fprintf(stderr, PROGRAM ": %d states and %d event indicators are not supported\n", nx, nz);
         return 2;
     }
-    const double tol = isfinite(imp.opt.rtol) ? imp.opt.rtol : imp.md.tolerance;
+    const double tol = isfinite(imp.run.opt.rtol) ? imp.run.opt.rtol : imp.run.md.tolerance;
     if (imp_initialize(&imp, fmi2ModelExchange, tol) > fmi2Warning || event_iteration(&imp) < 0) {
-        imp_fail(&imp, "initialization failed");
+        imp_fail(&imp.run, "initialization failed");
         return imp_close(&imp);
     }
-    const double t0 = imp.t_reached;
+    const double t0 = imp.run.t_reached;
     if (imp.api.GetContinuousStates(imp.c, x, (size_t)nx) > fmi2Warning ||
         (nz > 0 && imp.api.GetEventIndicators(imp.c, z_prev, (size_t)nz) > fmi2Warning)) {
-        imp_fail(&imp, "cannot read the initial states or event indicators");
+        imp_fail(&imp.run, "cannot read the initial states or event indicators");
         return imp_close(&imp);
     }
     imp_record(&imp, t0, 1);
     const long n_steps = (long)ceil((t_stop - t0) / h - 1e-9);
     const long every = (long)fmax(1.0, floor(dt_out / h + 0.5));
     for (long n = 1; n <= n_steps; n++) {
-        if (n > imp.opt.max_steps) {
-            imp_fail(&imp, "budget: more than %ld steps", imp.opt.max_steps);
+        if (n > imp.run.opt.max_steps) {
+            imp_fail(&imp.run, "budget: more than %ld steps", imp.run.opt.max_steps);
             break;
         }
         const double t = n == n_steps ? t_stop : t0 + (double)n * h;
-        const double dt = t - imp.t_reached;
+        const double dt = t - imp.run.t_reached;
         if (imp.api.GetDerivatives(imp.c, dx, (size_t)nx) > fmi2Warning) {
-            imp_fail(&imp, "fmi2GetDerivatives failed at t = %.17g", imp.t_reached);
+            imp_fail(&imp.run, "fmi2GetDerivatives failed at t = %.17g", imp.run.t_reached);
             break;
         }
         for (int i = 0; i < nx; i++) {
@@ -88,21 +88,21 @@ int main(int argc, char **argv)
         }
         if (imp.api.SetTime(imp.c, t) > fmi2Warning ||
             imp.api.SetContinuousStates(imp.c, x, (size_t)nx) > fmi2Warning) {
-            imp_fail(&imp, "the FMU refused the state at t = %.17g", t);
+            imp_fail(&imp.run, "the FMU refused the state at t = %.17g", t);
             break;
         }
-        imp.t_reached = t;
-        imp.steps++;
+        imp.run.t_reached = t;
+        imp.run.steps++;
         fmi2Boolean enter = fmi2False, terminate = fmi2False;
         if (imp.api.CompletedIntegratorStep(imp.c, fmi2True, &enter, &terminate) > fmi2Warning ||
             terminate) {
-            imp_fail(&imp, "fmi2CompletedIntegratorStep failed or asked to terminate");
+            imp_fail(&imp.run, "fmi2CompletedIntegratorStep failed or asked to terminate");
             break;
         }
         int event = enter;
         if (nz > 0) {
             if (imp.api.GetEventIndicators(imp.c, z, (size_t)nz) > fmi2Warning) {
-                imp_fail(&imp, "fmi2GetEventIndicators failed at t = %.17g", t);
+                imp_fail(&imp.run, "fmi2GetEventIndicators failed at t = %.17g", t);
                 break;
             }
             for (int j = 0; j < nz; j++) {
@@ -117,16 +117,16 @@ int main(int argc, char **argv)
         if (event) {
             const int changed = event_iteration(&imp);
             if (changed < 0) {
-                imp_fail(&imp, "the event iteration failed at t = %.17g", t);
+                imp_fail(&imp.run, "the event iteration failed at t = %.17g", t);
                 break;
             }
-            imp_event(&imp, t, changed ? "reinit-requested" : "event");
+            imp_event(&imp.run, t, changed ? "reinit-requested" : "event");
             if ((changed && imp.api.GetContinuousStates(imp.c, x, (size_t)nx) > fmi2Warning) ||
                 (nz > 0 && imp.api.GetEventIndicators(imp.c, z_prev, (size_t)nz) > fmi2Warning)) {
-                imp_fail(&imp, "cannot read the states after the event at t = %.17g", t);
+                imp_fail(&imp.run, "cannot read the states after the event at t = %.17g", t);
                 break;
             }
-            imp.reinits += changed;
+            imp.run.reinits += changed;
         }
     }
     return imp_close(&imp);

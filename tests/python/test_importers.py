@@ -7,7 +7,17 @@ Our own conformance importers (tests/importers/, plain C, built into build/impor
   (a) model exchange, CVODE re-initialised only when fmi2NewDiscreteStates says so,
   (b) model exchange, CVODE re-initialised at every event,
   (c) model exchange, explicit Euler at the DefaultExperiment stepSize,
-  (d) co-simulation, variable communication steps with rollback through the FMU state.
+  (d) co-simulation, variable communication steps with rollback through the FMU state,
+
+and the FMI 3.0 build (build/fmi3/csfh.fmu) through the FMI 3.0 importers, against the same FMI 2.0
+references with the same tolerances:
+
+  (a3) model exchange, CVODE re-initialised only when fmi3UpdateDiscreteStates says so (and (b3)
+       always),
+  (d3) co-simulation with early return (earlyReturnAllowed, eventModeUsed), variable
+       communication steps restarting at every lastSuccessfulTime, rollback through
+       fmi3GetFMUState/SetFMUState (in memory and serialized); every contact onset must end a
+       communication step within 1e-9 s of the reference's onset.
 
 Tolerances (stated per quantity, a few times what was observed, tied to the integrator):
 the CVODE importers and the CS master at rtol 1e-10 agree with the reference (the CS master's:
@@ -23,13 +33,17 @@ stay physical: the gap never below -5e-4 m (issue 14) and no energy gain beyond 
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
+from collections.abc import Iterator
 from functools import cache
 from pathlib import Path
 
 import numpy as np
 import pytest
+from fmpy import extract
 
+import csfh
 from csfh.model.scene import Scene, load_scene
 from csfh.runners.fmu import STATE_NAMES, simulate_me
 
@@ -39,6 +53,17 @@ LAW = "LN_spheres"
 OUTPUTS = (*STATE_NAMES, "contact.gap", "contact.F_N", "energy.total", "contact.F_N_peak")
 COLUMN = {"body1.x": "x", "body1.y": "y", "body1.vy": "vy", "contact.F_N": "F_N"}
 G = 9.81
+
+
+@pytest.fixture(scope="module")
+def unzipped3(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """The FMI 3.0 build of the FMU, unzipped."""
+    path = csfh.fmu_path(fmi_version=3)
+    if not path.exists():
+        pytest.fail(f"{path} not built: cmake -S . -B build && cmake --build build")
+    directory = extract(str(path), unzipdir=str(tmp_path_factory.mktemp("fmu3")))
+    yield directory
+    shutil.rmtree(directory, ignore_errors=True)
 
 
 def importer(name: str) -> Path:
@@ -128,19 +153,24 @@ def reference_grid(ref) -> np.ndarray:
     return ~np.isin(ref.table["t"], events)
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("mode", ["flags", "always"])
 @pytest.mark.parametrize("scene_name", SCENES)
 def test_me_cvode_importer_matches_fmpy(
-    unzipped: str, tmp_path: Path, scene_name: str, mode: str
+    request: pytest.FixtureRequest, tmp_path: Path, scene_name: str, mode: str, fmi: int
 ) -> None:
-    """(a) and (b): the FMU says at every contact-mode switch that the integrator must restart,
-    so re-initialising only when told gives the same solution as re-initialising always, and both
-    match fmpy at rtol 1e-10. (Before the FMU set valuesOfContinuousStatesChanged at the mode
-    switches, mode `flags` failed: CVODE's error test at t = 0.072-0.137 s.)"""
+    """(a) and (b), and (a3) and (b3) on the FMI 3.0 build: the FMU says at every contact-mode
+    switch that the integrator must restart (fmi2NewDiscreteStates / fmi3UpdateDiscreteStates:
+    valuesOfContinuousStatesChanged), so re-initialising only when told gives the same solution
+    as re-initialising always, and both match fmpy (FMI 2.0) at rtol 1e-10. A wrong flag is
+    caught: never set, `reinits` stays 0 (asserted equal to the number of events) and CVODE goes
+    on with a stale history (before the FMU set the flag, mode `flags` failed CVODE's error test
+    at t = 0.072-0.137 s); set when nothing changed, `reinits` exceeds it only if there are
+    extra events, which the event-time check catches."""
     scene = load_scene(scene_name)
     run = run_importer(
-        "me_cvode",
-        unzipped,
+        "me_cvode" if fmi == 2 else "fmi3_me_cvode",
+        request.getfixturevalue("unzipped" if fmi == 2 else "unzipped3"),
         scene,
         tmp_path,
         "--mode",
@@ -248,4 +278,79 @@ def test_cs_master_with_variable_steps_and_rollback(
         ("contact.F_N", 2e-4 * peak),
     ):
         error = np.max(np.abs(run.table[name] - ref.table[COLUMN[name]][rows]))
+        assert error <= tol, (name, error)
+
+
+@pytest.mark.parametrize("serialize", [False, True])
+@pytest.mark.parametrize("scene_name", SCENES)
+def test_fmi3_cs_master_with_early_return_variable_steps_and_rollback(
+    unzipped3: str, tmp_path: Path, scene_name: str, serialize: bool
+) -> None:
+    """(d3) the FMI 3.0 co-simulation master: earlyReturnAllowed and eventModeUsed, steps of
+    1e-2 s / 64 after every early return doubling up to 1e-2 s, each step starting at the last
+    one's end (lastSuccessfulTime after an early return), Event Mode whenever the FMU asks, every
+    7th step replayed from the saved FMU state (memory or serialized) with bitwise the same
+    outputs, earlyReturn and lastSuccessfulTime (checked by the master).
+
+    What it catches: an FMU that does not return early (or returns a lastSuccessfulTime that is
+    not the event time) puts the onsets on the communication grid, up to a step (>= 1.6e-4 s)
+    away from the reference onsets, where 1e-9 s is required; one that returns early at no event
+    makes more early returns than the reference has onsets and releases (their numbers must be
+    equal); an FMU state that does not restore everything fails the master's replay (status not
+    "completed"); a wrong state after an early return (the contact mode not switched) shows in
+    the states against the reference.
+
+    Tolerances: the onsets to 1e-9 s, with the FMU at rtol 1e-12 and the reference (fmpy model
+    exchange of the FMI 2.0 build) at rtol 1e-13 (observed <= 6e-10 s; at the FMU's rtol 1e-10
+    the onsets differ by up to 6e-8 s, the integrator's own error); the states with the stated
+    tolerances of the module docstring against the same reference at the communication points.
+    """
+    scene = load_scene(scene_name)
+    run = run_importer(
+        "fmi3_cs_master",
+        unzipped3,
+        scene,
+        tmp_path,
+        "--rtol",
+        "1e-12",
+        "--step",
+        "1e-2",
+        "--watch",
+        "contact.count",
+        "--stop",
+        str(scene.stop_time),
+        "--mode",
+        "serialize" if serialize else "memory",
+    )
+    assert run.value("t_reached") == pytest.approx(scene.stop_time, abs=1e-12)
+    steps = np.diff(run.table["time"])
+    assert steps.min() > 0  # each step starts where the last one ended
+    assert steps.max() == pytest.approx(1e-2)  # the steps did vary, up to h_max
+    assert run.value("rollbacks") >= run.value("steps") // 7 >= 10  # the replays
+    rows = run.events_path.read_text().splitlines()[1:]
+    kinds = np.array([r.split(",")[1] for r in rows])
+    times = np.array([float(r.split(",")[0]) for r in rows])
+    early, onsets = times[kinds == "early-return"], times[kinds == "watched-change"]
+    ref = simulate_me(scene, LAW, rtol=1e-13, output_times=run.table["time"][1:])
+    ref_onsets = np.asarray(ref.contacts)
+    ref_events = np.sort(np.concatenate([ref.contacts, ref.releases]))
+    # every onset ends a step: the step ends where contact.count changed are the onsets ...
+    assert len(onsets) == len(ref_onsets) >= 10
+    np.testing.assert_allclose(onsets, ref_onsets, rtol=0, atol=1e-9)
+    assert np.all(np.isin(onsets, run.table["time"]))
+    # ... because the FMU returned early there, and at every release, and nowhere else
+    assert len(early) == len(ref_events)
+    np.testing.assert_allclose(early, ref_events, rtol=0, atol=1e-9)
+    assert np.all(np.isin(onsets, early))
+    # the states at the communication points (the early-return points included)
+    rows_ref = np.isin(ref.table["t"], run.table["time"])
+    np.testing.assert_array_equal(ref.table["t"][rows_ref], run.table["time"])
+    peak = float(np.max(ref.table["F_N"]))
+    for name, tol in (
+        ("body1.x", 5e-8),
+        ("body1.y", 5e-8),
+        ("body1.vy", 2e-4),
+        ("contact.F_N", 2e-4 * peak),
+    ):
+        error = np.max(np.abs(run.table[name] - ref.table[COLUMN[name]][rows_ref]))
         assert error <= tol, (name, error)
