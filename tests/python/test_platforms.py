@@ -22,6 +22,7 @@ import fmpy
 import pytest
 from fmpy.model_description import ModelDescription
 
+import csfh
 from csfh import Scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -244,6 +245,9 @@ WINE_IMPORTERS: list[tuple[str, tuple[str, ...], int]] = [
     ("me_cvode", ("--mode", "flags", "--rtol", "1e-10", "--interval", "1e-3"), 4),
     ("me_euler", ("--interval", "1e-3"), 4),
     ("cs_master", ("--rtol", "1e-8"), 0),  # (it logs no events)
+    # the FMI 3.0 build through the FMI 3.0 importers (binaries/x86_64-windows/csfh.dll)
+    ("fmi3_me_cvode", ("--mode", "flags", "--rtol", "1e-10", "--interval", "1e-3"), 4),
+    ("fmi3_cs_master", ("--rtol", "1e-8"), 4),  # (it logs its early returns: two contacts)
 ]
 IMPORTER_OUTPUTS = (*STATES, "contact.gap", "contact.F_N")
 
@@ -260,12 +264,19 @@ def test_conformance_importers_under_wine_reproduce_linux64(
     min_events: int,
 ) -> None:
     """`central` to 0.3 s (the drop and two contacts, where the runs are well conditioned, see
-    CASES): the same output rows and events, every output to 1e-9 of its scale."""
-    fmu_dir = Path(fmpy.extract(str(fmu_path), unzipdir=str(tmp_path / "fmu")))
+    CASES): the same output rows and events, every output to 1e-9 of its scale. The fmi3_
+    importers run the FMI 3.0 build."""
+    fmi3 = name.startswith("fmi3_")
+    fmu = csfh.fmu_path(fmi_version=3) if fmi3 else fmu_path
+    fmu_dir = Path(fmpy.extract(str(fmu), unzipdir=str(tmp_path / "fmu")))
     linux = BUILD / "importers" / f"csfh_import_{name}"
     windows = BUILD / "platforms" / "win64" / "importers" / f"csfh_import_{name}.exe"
     need(linux.is_file() and windows.is_file(), f"{linux} or {windows} not built")
-    binary(fmu_dir, "win64", "csfh")
+    if fmi3:
+        dll = fmu_dir / "binaries" / "x86_64-windows" / "csfh.dll"
+        need(dll.is_file(), "the FMI 3.0 csfh.fmu has no x86_64-windows binary (host-only build?)")
+    else:
+        binary(fmu_dir, "win64", "csfh")
     starts = [
         f"{n}={'true' if v is True else 'false' if v is False else repr(v)}"
         for n, v in scene_starts(load_scene("central"), "LN_spheres").items()
