@@ -73,6 +73,26 @@ def test_chunking_does_not_change_the_run(monkeypatch: pytest.MonkeyPatch, chunk
     assert len(default.contacts) >= 2
 
 
+class Recorder:
+    """A Progress that keeps what it was told."""
+
+    def __init__(self) -> None:
+        self.done: list[float] = []
+
+    def update(self, done: float) -> None:
+        self.done.append(done)
+
+
+def test_progress_between_chunks(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(fmu_runner, "CS_STEPS_CHUNK", (100, 100))
+    progress = Recorder()
+    run = simulate_cs(load_scene("central"), "LN_spheres", stop_time=0.1, progress=progress)  # type: ignore[arg-type]
+    t = run.table["t"]
+    assert len(t) == 1001  # 1000 steps of 1e-4 s: ten chunks
+    assert progress.done == [t[100 * (i + 1)] / 0.1 for i in range(10)]
+    assert progress.done[-1] == 1.0
+
+
 MASSLESS = {"body1.m": 1e-30}
 """A body so light that the first impact's step size underflows: the FMU fails mid-way."""
 
