@@ -5,7 +5,7 @@ law (LN_spheres), same relative tolerance, same output grid; every ratio is meas
 
 A. Complete runs with the harness drivers (instantiate, set the scene, simulate, free):
    ME: csfh.runners.fmu.simulate_me (one CVode step at a time, dense output onto the grid)
-   CS: csfh.runners.fmu.simulate_cs (one fmi2DoStep per grid point)
+   CS: csfh.runners.fmu.simulate_cs (one fmi2DoStep per grid point, the loop in C)
    and fmpy's own two drivers, fmpy.simulate_fmu with fmi_type ModelExchange / CoSimulation.
 B. The simulation loop alone, after initialization (what differs between the interfaces; the
    FMU loading and the parameter setting cost the same in both): fmpy's CVodeSolver stepping the
@@ -13,10 +13,13 @@ B. The simulation loop alone, after initialization (what differs between the int
    fmpy.simulate_fmu), against fmi2DoStep from grid point to grid point, with each of the FMU's
    co-simulation methods (solver.method: auto, the default, RK45 while not stiff and BDF where
    stiff; BDF, as fmpy's CVode; Adams; RK45 alone). Both
-   read the six states at every grid point, with the same direct fmi2GetReal call
-   (csfh.direct_calls, ~1 us per call); fmi2DoStep is called directly too, as csfh.simulate_cs
-   does. The column "auto, fmpy calls" is the same CS loop through fmpy's FMU2Slave methods,
-   whose Python cost per call (~6-9 us) dominates on a fine grid; the column "auto, C master" is
+   read the six states at every grid point, ME with a direct fmi2GetReal call
+   (csfh.direct_calls, ~1 us per call). The CS loop runs as csfh.simulate_cs runs it: in C, a
+   chunk of communication steps per ctypes call (csfh.runners.cs_steps), on the instance fmpy
+   created. The column "auto, Python loop" is the CS loop in Python with one direct ctypes call
+   per fmi2DoStep and per read (simulate_cs's loop before, ~1 us per call); "auto, fmpy calls"
+   the same through fmpy's FMU2Slave methods, whose Python cost per call (~6-9 us) dominates on
+   a fine grid; the column "auto, C master" is
    the same loop in a compiled master (benchmarks/master/bench_cs_master.c, built as
    build/bench_cs_master), as a C/C++ importer runs the FMU: no Python per communication point.
    Beside the times, the error of the first three contact times against model exchange at rtol
@@ -44,8 +47,9 @@ from c_master import default_master, run_c_master
 from csfh import load_scene
 from csfh.model import model_info
 from csfh.model.scene import Scene
+from csfh.runners.cs_steps import CSteps
 from csfh.runners.direct_calls import DirectCalls
-from csfh.runners.fmu import STATE_NAMES, simulate_cs, simulate_me
+from csfh.runners.fmu import STATE_NAMES, chunk_size, simulate_cs, simulate_me
 
 LAW = "LN_spheres"
 METHODS = {"auto": 1, "BDF": 2, "Adams": 3, "RK45": 4}  # solver.method (enumeration SolverMethod)
@@ -152,24 +156,32 @@ class Loops:
         me.terminate()
         return wall, contacts
 
-    def run_cs(
-        self, rtol: float, dt: float, method: int = 1, wrappers: bool = False
-    ) -> tuple[float, int]:
+    def run_cs(self, rtol: float, dt: float, method: int = 1, loop: str = "c") -> tuple[float, int]:
+        """The CS loop reading the six states at every grid point: loop "c" as simulate_cs runs
+        it (csfh.runners.cs_steps: in C, a chunk of steps per ctypes call), "python" (one direct
+        ctypes call per fmi2DoStep and per read, simulate_cs's loop before), "fmpy" (fmpy's
+        FMU2Slave methods)."""
         cs = self.cs
         cs.reset()
         _setup(cs, self.scene, rtol, {"solver.method": method})
         n = round(self.scene.stop_time / dt)
         direct = DirectCalls(cs)
         do_step, read_states = direct.do_step, direct.real_reader(self.refs)
+        steps = CSteps(cs, dt, self.scene.stop_time, self.refs)
+        size = chunk_size(n)
         t0 = time.perf_counter()
-        if wrappers:  # fmpy's FMU2Slave methods
+        if loop == "fmpy":
             for k in range(n):
                 cs.doStep(k * dt, dt)
                 cs.getReal(self.refs)
-        else:
+        elif loop == "python":
             for k in range(n):
                 do_step(k * dt, dt)
                 read_states()
+        else:
+            t = 0.0
+            for k in range(0, n, size):
+                t = float(steps.run(k, min(k + size, n), t).times[-1])
         wall = time.perf_counter() - t0
         contacts = cs.getInteger([self.count])[0]
         cs.terminate()
@@ -253,7 +265,8 @@ def main() -> None:
     print(
         f"  {'rtol':>6} {'grid [s]':>8} | {'ME (fmpy CVode)':>24} | "
         + " | ".join(f"{'CS ' + m:>24} {'ratio':>6}" for m in METHODS)
-        + f" | {'auto, fmpy calls':>17} | {'auto, C master':>17} | contacts | target >= 10x (auto)"
+        + f" | {'auto, Python loop':>17} | {'auto, fmpy calls':>17} | {'auto, C master':>17} "
+        + "| contacts | target >= 10x (auto)"
     )
     reference = simulate_me(scene, LAW, rtol=1e-12).contact_records["t_onset"][:3]
 
@@ -265,7 +278,12 @@ def main() -> None:
     try:
         for rtol in args.rtol:
             for dt in args.grid:
-                walls: dict[str, list[float]] = {"me": [], "fmpy": [], **{m: [] for m in METHODS}}
+                walls: dict[str, list[float]] = {
+                    "me": [],
+                    "python": [],
+                    "fmpy": [],
+                    **{m: [] for m in METHODS},
+                }
                 walls["c"] = []
                 contacts = {}
                 for _ in range(args.repeats):  # the variants in turn (same machine state)
@@ -274,7 +292,9 @@ def main() -> None:
                     for m, value in METHODS.items():
                         wall, contacts[m] = loops.run_cs(rtol, dt, value)
                         walls[m].append(wall)
-                    wall, contacts["fmpy"] = loops.run_cs(rtol, dt, METHODS["auto"], wrappers=True)
+                    wall, contacts["python"] = loops.run_cs(rtol, dt, METHODS["auto"], "python")
+                    walls["python"].append(wall)
+                    wall, contacts["fmpy"] = loops.run_cs(rtol, dt, METHODS["auto"], "fmpy")
                     walls["fmpy"].append(wall)
                     if master is not None:
                         wall, contacts["c"] = loops.run_c_master(master, rtol, dt, 1)
@@ -296,10 +316,13 @@ def main() -> None:
                     f"{1e3 * t[m]:8.1f} ms [{err[m]:8.1e}] {t['me'] / t[m]:5.1f}x" for m in METHODS
                 )
                 ratio = t["me"] / t["auto"]
-                counts = "/".join(str(contacts.get(k, "-")) for k in ("me", *METHODS, "fmpy", "c"))
+                counts = "/".join(
+                    str(contacts.get(k, "-")) for k in ("me", *METHODS, "python", "fmpy", "c")
+                )
                 print(
                     f"  {rtol:6.0e} {dt:8.0e} | {1e3 * t['me']:8.1f} ms [{err['me']:8.1e}]     | "
-                    f"{cells} | {1e3 * t['fmpy']:8.1f} ms {t['me'] / t['fmpy']:5.1f}x | "
+                    f"{cells} | {1e3 * t['python']:8.1f} ms {t['me'] / t['python']:5.1f}x | "
+                    f"{1e3 * t['fmpy']:8.1f} ms {t['me'] / t['fmpy']:5.1f}x | "
                     f"{1e3 * t['c']:8.1f} ms {t['me'] / t['c']:5.1f}x | {counts} | "
                     f"{'met' if ratio >= 10 else 'NOT met'}"
                 )

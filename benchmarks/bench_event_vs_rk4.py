@@ -12,13 +12,19 @@ RK4, the CS run from Python and the CS run from the compiled master take turns (
 state for all three). Targets: >= 10x fewer RHS evaluations; wall time >= 10x from the C master
 and >= 5x from Python.
 
-CS wall time is the time spent in fmi2DoStep with the FMU observed every 10 ms (to read the
-contact events), which includes creating the integrator at the first step; RK4 runs entirely in
-C, in one call, writing a record every 1e-4 s as the harness runs it. Each fmi2DoStep from Python
-costs about 1 us more than the same call from C (the ctypes call, and the FMU's code and data are
-no longer in the caches after the interpreter's work between calls), so the matched CS run is
-timed also in the compiled master (master/bench_cs_master.c, built as build/bench_cs_master; its
-loop after a warm-up run, the same 10 ms grid): the wall time a C/C++ importer pays.
+CS wall time from Python is simulate_cs's stats["do_step_time"] on a 10 ms communication grid
+(the FMU observed every 10 ms, to read the contact events): the time inside simulate_cs's
+communication loop, which runs in C (csfh.runners.cs_steps: fmi2DoStep and the reads of the
+outputs and contact events, all 42 steps in one ctypes call) and includes creating the
+integrator at the first step of the fresh instance; RK4 runs entirely in C, in one call, writing
+a record every 1e-4 s as the harness runs it. The column "Py loop" is the same run with
+simulate_cs's loop in Python (step_loop="python": one ctypes call per FMI call, the time of the
+fmi2DoStep calls alone, the reads not included), as before: each fmi2DoStep from Python costs
+about 1 us more than the same call from C (the ctypes call, and the FMU's code and data are no
+longer in the caches after the interpreter's work between calls). The matched CS run is timed
+also in the compiled master (master/bench_cs_master.c, built as build/bench_cs_master; its loop
+on a re-used instance after a warm-up run, reading the six states, the same 10 ms grid): the
+wall time a C/C++ importer pays.
 
 Run: python benchmarks/bench_event_vs_rk4.py [--scene central] [--repeats 7]
      [--master build/bench_cs_master]
@@ -41,7 +47,21 @@ from csfh.studies.accuracy.metrics import contact_errors
 
 RK4_SETTINGS = [(2e-4, 1e-4), (1e-4, 1e-5), (5e-5, 1e-6), (2.5e-5, 1e-7), (1.25e-5, 1e-8)]
 CS_RTOLS = [
-    1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7, 3e-8, 1e-8, 3e-9, 1e-9, 3e-10, 1e-10
+    1e-3,
+    3e-4,
+    1e-4,
+    3e-5,
+    1e-5,
+    3e-6,
+    1e-6,
+    3e-7,
+    1e-7,
+    3e-8,
+    1e-8,
+    3e-9,
+    1e-9,
+    3e-10,
+    1e-10,
 ]
 
 
@@ -65,7 +85,8 @@ def main() -> None:
     header = (
         f"{'model':<13} {'RK4 h0, tol':<16} {'error [s]':>9} {'RHS':>8} {'wall':>9} | "
         f"{'CS rtol':>7} {'error [s]':>9} {'RHS':>6} {'wall':>9} | "
-        f"{'RHS ratio':>9} {'wall ratio':>10} | {'C master':>9} {'wall ratio':>10}"
+        f"{'RHS ratio':>9} {'wall ratio':>10} | {'Py loop':>9} {'wall ratio':>10} | "
+        f"{'C master':>9} {'wall ratio':>10}"
     )
     print(header)
     print("-" * len(header))
@@ -90,13 +111,18 @@ def main() -> None:
                 print(line + f"{wall:9.2e} | no CS run reaches this error")
                 continue
             rtol, cerr, crhs = min(ok, key=lambda c: c[2])
-            walls: dict[str, list[float]] = {"rk4": [], "cs": [], "c": []}
+            walls: dict[str, list[float]] = {"rk4": [], "cs": [], "py": [], "c": []}
             for _ in range(args.repeats):  # in turns: the same machine state for all three
                 walls["rk4"].append(rk4_event(scene, model, h0=h0, tol=tol).stats["wall_time"])
                 walls["cs"].append(
                     simulate_cs(scene, model, rtol=rtol, communication_step=1e-2).stats[
                         "do_step_time"
                     ]
+                )
+                walls["py"].append(
+                    simulate_cs(
+                        scene, model, rtol=rtol, communication_step=1e-2, step_loop="python"
+                    ).stats["do_step_time"]
                 )
                 if master is not None:
                     walls["c"].append(
@@ -105,11 +131,12 @@ def main() -> None:
                         ).loop_seconds
                     )
             wall, cwall = statistics.median(walls["rk4"]), statistics.median(walls["cs"])
+            py_wall = statistics.median(walls["py"])
             c_wall = statistics.median(walls["c"]) if walls["c"] else math.nan
             print(
                 line + f"{wall:9.2e} | {rtol:7.0e} {cerr:9.2e} {crhs:6d} {cwall:9.2e} | "
                 f"{rk4_rhs / crhs:9.1f} {wall / cwall:10.2f} | "
-                f"{c_wall:9.2e} {wall / c_wall:10.2f}"
+                f"{py_wall:9.2e} {wall / py_wall:10.2f} | {c_wall:9.2e} {wall / c_wall:10.2f}"
             )
     print("\ntargets: RHS ratio >= 10; wall ratio >= 5 from Python, >= 10 from the C master")
 

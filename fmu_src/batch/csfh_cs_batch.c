@@ -9,7 +9,7 @@
 
 #include "fmi2FunctionTypes.h"
 
-#define ABI_VERSION 1
+#define ABI_VERSION 2 /* 2: csfh_cs_steps */
 #define MAX_OUT 64 /* outputs per run */
 
 /* ------------------------------------------------------------------------------------------ */

@@ -87,6 +87,50 @@ CSFH_BATCH_API long long csfh_cs_batch_run(const csfh_cs_batch_spec_t *spec, siz
                                            double *records, int *status, char *messages,
                                            size_t message_size);
 
+/* ------------------------------------------------------------------------------------------ */
+/* The communication loop of one run on an instance someone else created (csfh_cs_steps.c):
+ * what csfh.runners.fmu.simulate_cs does per communication point (fmi2DoStep, then read fixed
+ * sets of Real, Integer and Boolean outputs), for a chunk of steps in one call, so that Python
+ * pays one call per chunk instead of several per step. The FMU's functions are passed as
+ * pointers (those of the binary the caller loaded, e.g. fmpy's), the instance stays the
+ * caller's. */
+typedef struct {
+    void *do_step;     /* fmi2DoStepTYPE * */
+    void *get_real;    /* fmi2GetRealTYPE * */
+    void *get_integer; /* fmi2GetIntegerTYPE * */
+    void *get_boolean; /* fmi2GetBooleanTYPE * */
+    void *component;   /* fmi2Component */
+    /* the grid of simulate_cs: t_k = min(k step, stop_time) */
+    double step;
+    double stop_time;
+    /* the outputs read after every step (any count may be 0) */
+    size_t n_real;
+    const unsigned int *real_vr;
+    size_t n_integer;
+    const unsigned int *integer_vr;
+    size_t n_boolean;
+    const unsigned int *boolean_vr;
+} csfh_cs_steps_t;
+
+/* Which call failed (failure[0]); failure[1] is its fmi2Status. */
+#define CSFH_STEPS_NONE (-1)
+#define CSFH_STEPS_DO_STEP 0
+#define CSFH_STEPS_GET_REAL 1
+#define CSFH_STEPS_GET_INTEGER 2
+#define CSFH_STEPS_GET_BOOLEAN 3
+
+/* Steps k = k_first .. k_last - 1 from time t (the grid time reached by step k_first - 1, 0 at
+ * the start): step k goes from t to t_next = min((k + 1) step, stop_time), then the outputs are
+ * read. Row i (step k_first + i) of the buffers gets t_next (times), the Reals (reals, n_real
+ * per row), Integers and Booleans (as fmi2Integer / fmi2Boolean, ints). Returns the number of
+ * steps completed with their outputs read; failure = {call, status}: CSFH_STEPS_NONE if all
+ * went through (fmi2Warning counts as success), else the call that returned fmi2Error or worse
+ * at step k_first + returned value (times[returned value] is then set if fmi2DoStep itself
+ * succeeded). -1 for bad arguments. */
+CSFH_BATCH_API long long csfh_cs_steps(const csfh_cs_steps_t *loop, long long k_first,
+                                       long long k_last, double t, double *times, double *reals,
+                                       int *integers, int *booleans, int *failure);
+
 /* The version of this interface (the Python side checks it). */
 CSFH_BATCH_API int csfh_cs_batch_abi_version(void);
 

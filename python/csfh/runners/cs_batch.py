@@ -27,11 +27,10 @@ import numpy as np
 from ..errors import SimulationError
 from ..model import model_info
 from ..model.scene import Scene
-from ..paths import batch_library_path
 from ..trajectory import CONTACT_FIELDS, Trajectory
+from . import cs_steps
 from .fmu import CS_OUTPUT_NAMES, OUTPUT_NAMES, cs_method_name, start_values, unzipped_fmu
 
-ABI_VERSION = 1
 REDUCTIONS = {"final": 0, "max": 1, "min": 2, "absmax": 3, "first_when": 4, "time_of_max": 5}
 """Reductions over the communication points (csfh_cs_batch.h): the final value, the largest, the
 smallest, the largest magnitude, the value at the first point where another output is > 0, the
@@ -97,14 +96,8 @@ class _Spec(Structure):
 
 @cache
 def library() -> Any:
-    """The batch master (loaded once per process), its ABI checked."""
-    lib = ctypes.CDLL(str(batch_library_path()))
-    lib.csfh_cs_batch_abi_version.restype = c_int
-    if lib.csfh_cs_batch_abi_version() != ABI_VERSION:
-        raise RuntimeError(
-            f"{batch_library_path()} has ABI version {lib.csfh_cs_batch_abi_version()}, this "
-            f"package needs {ABI_VERSION}: rebuild or reinstall csfh"
-        )
+    """The batch master (loaded once per process, its ABI checked: cs_steps.library)."""
+    lib = cs_steps.library()
     lib.csfh_cs_batch_points.restype = c_longlong
     lib.csfh_cs_batch_points.argtypes = [c_double, c_double]
     lib.csfh_cs_batch_run.restype = c_longlong

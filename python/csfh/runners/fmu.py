@@ -31,6 +31,7 @@ from ..model.scene import MAX_OUTPUT_SAMPLES, Scene
 from ..paths import fmu_path
 from ..progress import Progress
 from ..trajectory import CONTACT_FIELDS, Trajectory
+from . import cs_steps
 from .direct_calls import DirectCalls
 
 STATE_NAMES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
@@ -162,12 +163,23 @@ class _Table:
     def __init__(self, names: tuple[str, ...]) -> None:
         self.names = names
         self.rows: list[list[float]] = []
+        self._blocks: list[np.ndarray] = []  # earlier rows, as arrays
 
     def add(self, row: list[float]) -> None:
         self.rows.append(row)
 
+    def add_block(self, block: np.ndarray) -> None:
+        """Rows as a 2-D array (after those added before)."""
+        if self.rows:
+            self._blocks.append(self._rows_array())
+            self.rows = []
+        self._blocks.append(np.asarray(block, dtype=float).reshape(-1, len(self.names)))
+
+    def _rows_array(self) -> np.ndarray:
+        return np.array(self.rows, dtype=float).reshape(-1, len(self.names))
+
     def arrays(self) -> dict[str, np.ndarray]:
-        data = np.array(self.rows, dtype=float).reshape(-1, len(self.names))
+        data = np.concatenate([*self._blocks, self._rows_array()])
         return {n: data[:, i].copy() for i, n in enumerate(self.names)}
 
 
@@ -484,6 +496,45 @@ def simulate_me(
     return tr
 
 
+CS_STEPS_CHUNK = (256, 4096)
+"""The communication steps per C call of simulate_cs's loop: about 1 % of the run (for the
+progress shown between calls), at least the first number and at most the second."""
+
+
+def chunk_size(n: int) -> int:
+    """Steps per C call for a run of n communication steps (CS_STEPS_CHUNK)."""
+    lo, hi = CS_STEPS_CHUNK
+    return max(1, min(hi, max(lo, math.ceil(n / 100))))
+
+
+def _contact_bookkeeping(
+    records: list[list[float]],
+    count: int,
+    active: bool,
+    counts: np.ndarray,
+    actives: np.ndarray,
+    events: np.ndarray,
+) -> tuple[int, bool]:
+    """simulate_cs's contact records over a chunk of communication points (counts, active flags
+    and the event variables onset time and speed, release time and speed, one row per point),
+    after the state (count, active) of the point before; returns the state after. The FMU
+    reports the located event times of the last onset and release; contacts that begin and end
+    inside one communication step show only their last values."""
+    if not len(counts):
+        return count, active
+    previous_counts = np.concatenate([[count], counts[:-1]])
+    previous_actives = np.concatenate([[active], actives[:-1]])
+    onset = counts > previous_counts
+    # only where a contact begins or ends does anything happen
+    for i in np.flatnonzero(onset | (previous_actives & ~actives)):
+        t_on, v_on, t_off, v_off = (float(x) for x in events[i])
+        if onset[i]:
+            records.append([t_on, v_on, math.nan, math.nan, math.nan, math.nan])
+        if records and not actives[i]:
+            records[-1][2:4] = [t_off, v_off]
+    return int(counts[-1]), bool(actives[-1])
+
+
 def cs_method_name(scene: Scene, parameters: dict[str, Any] | None = None) -> str:
     """The co-simulation method a run uses (solver.method: from the overrides, the scene, or the
     FMU's start value)."""
@@ -503,8 +554,18 @@ def simulate_cs(
     stop_time: float | None = None,
     parameters: dict[str, Any] | None = None,
     progress: Progress | None = None,
+    step_loop: str | None = None,
 ) -> Trajectory:
-    """Co-simulation of the FMU (CVODE inside the FMU): one output row per communication step."""
+    """Co-simulation of the FMU (CVODE inside the FMU): one output row per communication step.
+
+    The communication loop (fmi2DoStep, then reading the outputs and the contact events) runs in
+    C, a chunk of steps per call (`csfh.runners.cs_steps`, in libcsfh_batch.so), or, with
+    step_loop="python" or without that library, in Python with one ctypes call per FMI call;
+    the results are the same, bitwise. stats["do_step_time"] is the wall time of the loop's FMI
+    calls: in C the time inside the chunk calls, which includes reading the outputs; in Python
+    the time of the fmi2DoStep calls alone."""
+    if step_loop not in (None, "c", "python"):
+        raise ValueError(f"step_loop = {step_loop!r}: 'c', 'python' or None")
     if law not in model_info.LAWS:
         raise ValueError(f"law {law!r} is not an event-driven law ({', '.join(model_info.LAWS)})")
     rtol = scene.integrator.rtol if rtol is None else rtol
@@ -542,32 +603,63 @@ def simulate_cs(
             )
         t = 0.0
         do_step_time = 0.0
-        # the loop calls the FMU directly (fmpy's wrappers would cost more than the FMU's own
-        # work on a fine communication grid)
-        direct = DirectCalls(fmu)
-        read_reals = direct.real_reader([*out_vrs, *event_vrs])
-        read_count = direct.integer_reader([count_vr])
-        read_active = direct.boolean_reader([active_vr])
-        n_out = len(out_vrs)
-        for k in range(n):
-            t_next = min((k + 1) * h, t_end)
-            t0 = time.perf_counter()
-            direct.do_step(t, t_next - t)
-            do_step_time += time.perf_counter() - t0
-            t = t_next
-            values = read_reals()
-            table.add([t, *values[:n_out]])
-            # the FMU reports the located event times of the last onset and release; contacts
-            # that begin and end inside one communication step show only their last values
-            new_count, new_active = read_count()[0], bool(read_active()[0])
-            t_on, v_on, t_off, v_off = values[n_out:]
-            if new_count > count:
-                records.append([t_on, v_on, math.nan, math.nan, math.nan, math.nan])
-            if records and not new_active and (new_count > count or active):
-                records[-1][2:4] = [t_off, v_off]
-            count, active = new_count, new_active
-            if progress is not None:
-                progress.update(t / t_end)
+        use_c = (step_loop or ("c" if cs_steps.available() else "python")) == "c"
+        if use_c:
+            # the loop in C, a chunk of steps per call (csfh.runners.cs_steps): Python's cost per
+            # communication point (~1.5 us of ctypes calls and cold caches) would be more than
+            # the FMU's own work on a fine grid; the contact bookkeeping over the returned arrays
+            loop = cs_steps.CSteps(fmu, h, t_end, [*out_vrs, *event_vrs], [count_vr], [active_vr])
+            n_out = len(out_vrs)
+            size = chunk_size(n)
+            rows: list[np.ndarray] = []
+            for k in range(0, n, size):
+                try:
+                    chunk = loop.run(k, min(k + size, n), t)
+                except FMICallException as exc:
+                    t = exc.t  # type: ignore[attr-defined]
+                    raise
+                do_step_time += chunk.seconds
+                t = float(chunk.times[-1])
+                rows.append(np.column_stack([chunk.times, chunk.reals[:, :n_out]]))
+                count, active = _contact_bookkeeping(
+                    records,
+                    count,
+                    active,
+                    chunk.integers[:, 0],
+                    chunk.booleans[:, 0] != 0,
+                    chunk.reals[:, n_out:],
+                )
+                if progress is not None:
+                    progress.update(t / t_end)
+            table.add_block(np.concatenate(rows))
+        else:
+            # the loop calls the FMU directly (fmpy's wrappers would cost more than the FMU's
+            # own work on a fine communication grid)
+            direct = DirectCalls(fmu)
+            read_reals = direct.real_reader([*out_vrs, *event_vrs])
+            read_count = direct.integer_reader([count_vr])
+            read_active = direct.boolean_reader([active_vr])
+            n_out = len(out_vrs)
+            for k in range(n):
+                t_next = min((k + 1) * h, t_end)
+                t0 = time.perf_counter()
+                direct.do_step(t, t_next - t)
+                do_step_time += time.perf_counter() - t0
+                t = t_next
+                values = read_reals()
+                table.add([t, *values[:n_out]])
+                # the FMU reports the located event times of the last onset and release;
+                # contacts that begin and end inside one communication step show only their
+                # last values
+                new_count, new_active = read_count()[0], bool(read_active()[0])
+                t_on, v_on, t_off, v_off = values[n_out:]
+                if new_count > count:
+                    records.append([t_on, v_on, math.nan, math.nan, math.nan, math.nan])
+                if records and not new_active and (new_count > count or active):
+                    records[-1][2:4] = [t_off, v_off]
+                count, active = new_count, new_active
+                if progress is not None:
+                    progress.update(t / t_end)
         steps, rhs = fmu.getInteger(
             [_vr("diagnostics.integrator_steps"), _vr("diagnostics.rhs_evaluations")]
         )

@@ -1,0 +1,175 @@
+"""The communication loop of `simulate_cs` in C: fmi2DoStep and the reads of fixed sets of
+outputs for a chunk of communication steps in one ctypes call (csfh_cs_steps in the batch library
+libcsfh_batch.so, fmu_src/batch/csfh_cs_steps.c), on the instance fmpy created.
+
+From Python, every FMI call through ctypes costs about 1 us beyond the FMU's own work (the call,
+and the FMU's code and data no longer in the caches after the interpreter's work between calls):
+on a fine communication grid, or on a run of few steps timed against a compiled integrator, that
+is most of the time. Here Python pays one call per chunk of steps. The grid is simulate_cs's,
+computed the same way (t_next = min((k + 1) h, t_end), steps t_next - t), so the results are
+those of the Python loop, bitwise (tests/python/test_cs_steps.py)."""
+
+from __future__ import annotations
+
+import ctypes
+from collections.abc import Sequence
+from ctypes import POINTER, Structure, c_double, c_int, c_longlong, c_size_t, c_uint, c_void_p
+from ctypes import cast as ctypes_cast
+from dataclasses import dataclass
+from functools import cache
+from typing import Any
+
+import numpy as np
+from fmpy.fmi1 import FMICallException
+
+from .. import paths
+
+_CALLS = ("fmi2DoStep", "fmi2GetReal", "fmi2GetInteger", "fmi2GetBoolean")
+"""The calls csfh_cs_steps reports as failed (CSFH_STEPS_DO_STEP .. _GET_BOOLEAN)."""
+
+
+class _Loop(Structure):
+    _fields_ = [
+        ("do_step", c_void_p),
+        ("get_real", c_void_p),
+        ("get_integer", c_void_p),
+        ("get_boolean", c_void_p),
+        ("component", c_void_p),
+        ("step", c_double),
+        ("stop_time", c_double),
+        ("n_real", c_size_t),
+        ("real_vr", POINTER(c_uint)),
+        ("n_integer", c_size_t),
+        ("integer_vr", POINTER(c_uint)),
+        ("n_boolean", c_size_t),
+        ("boolean_vr", POINTER(c_uint)),
+    ]
+
+
+ABI_VERSION = 2  # 2: csfh_cs_steps
+"""The version of the batch library's interface this package needs (csfh_cs_batch.h)."""
+
+
+@cache
+def library() -> Any:
+    """The batch library (libcsfh_batch.so: the batch master of cs_batch and csfh_cs_steps),
+    loaded once per process, its ABI checked."""
+    lib = ctypes.CDLL(str(paths.batch_library_path()))
+    lib.csfh_cs_batch_abi_version.restype = c_int
+    if lib.csfh_cs_batch_abi_version() != ABI_VERSION:
+        raise RuntimeError(
+            f"{paths.batch_library_path()} has ABI version {lib.csfh_cs_batch_abi_version()}, this "
+            f"package needs {ABI_VERSION}: rebuild or reinstall csfh"
+        )
+    lib.csfh_cs_steps.restype = c_longlong
+    lib.csfh_cs_steps.argtypes = [
+        POINTER(_Loop),
+        c_longlong,
+        c_longlong,
+        c_double,
+        c_void_p,
+        c_void_p,
+        c_void_p,
+        c_void_p,
+        POINTER(c_int),
+    ]
+    return lib
+
+
+def available() -> bool:
+    """Whether the batch library is there (a build without it: simulate_cs loops in Python)."""
+    try:
+        paths.batch_library_path()
+    except FileNotFoundError:
+        return False
+    return True
+
+
+@dataclass
+class Chunk:
+    """The outputs after steps k_first .. k_first + done - 1 (rows 0 .. done - 1)."""
+
+    times: np.ndarray  # the grid times reached
+    reals: np.ndarray  # done x n_real
+    integers: np.ndarray  # done x n_integer (int32)
+    booleans: np.ndarray  # done x n_boolean (int32, fmi2Boolean)
+    done: int
+    seconds: float  # wall time inside the C call
+
+
+class CSteps:
+    """Chunks of communication steps of an instantiated, initialised fmpy FMU2Slave (which stays
+    the owner of the instance) on the grid min((k + 1) h, t_end), reading fixed value references
+    after every step."""
+
+    def __init__(
+        self,
+        slave: Any,
+        step: float,
+        stop_time: float,
+        reals: Sequence[int],
+        integers: Sequence[int] = (),
+        booleans: Sequence[int] = (),
+    ) -> None:
+        self._lib = library()
+        dll = slave.dll
+
+        def address(name: str) -> int:
+            return ctypes_cast(getattr(dll, name), c_void_p).value or 0
+
+        self._refs = [(c_uint * len(r))(*r) for r in (reals, integers, booleans)]
+        self._loop = _Loop(
+            address("fmi2DoStep"),
+            address("fmi2GetReal"),
+            address("fmi2GetInteger"),
+            address("fmi2GetBoolean"),
+            slave.component,
+            step,
+            stop_time,
+            len(reals),
+            self._refs[0],
+            len(integers),
+            self._refs[1],
+            len(booleans),
+            self._refs[2],
+        )
+        self.counts = (len(reals), len(integers), len(booleans))
+        self._failure = (c_int * 2)()
+
+    def run(self, k_first: int, k_last: int, t: float) -> Chunk:
+        """Steps k_first .. k_last - 1 from time t (the grid time before step k_first). Raises
+        fmpy's FMICallException for a call that returned fmi2Error or worse, with `t` (the time
+        the failed step started from, or reached if reading its outputs failed) and `chunk` (the
+        steps before it) attached."""
+        from time import perf_counter
+
+        m = k_last - k_first
+        nr, ni, nb = self.counts
+        times = np.empty(m)
+        reals = np.empty((m, nr))
+        integers = np.empty((m, ni), dtype=np.int32)
+        booleans = np.empty((m, nb), dtype=np.int32)
+        t0 = perf_counter()
+        done = self._lib.csfh_cs_steps(
+            self._loop,
+            k_first,
+            k_last,
+            t,
+            times.ctypes.data,
+            reals.ctypes.data,
+            integers.ctypes.data,
+            booleans.ctypes.data,
+            self._failure,
+        )
+        seconds = perf_counter() - t0
+        if done < 0:
+            raise ValueError(f"csfh_cs_steps: bad arguments (steps {k_first} .. {k_last})")
+        chunk = Chunk(times[:done], reals[:done], integers[:done], booleans[:done], done, seconds)
+        call, status = self._failure
+        if call >= 0:
+            exc = FMICallException(function=_CALLS[call], status=status)
+            reached = call > 0  # fmi2DoStep went through, reading its outputs failed
+            exc.t = float(times[done]) if reached else float(times[done - 1]) if done else t
+            exc.chunk = chunk
+            raise exc
+        return chunk
