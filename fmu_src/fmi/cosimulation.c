@@ -69,6 +69,7 @@
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include "cosimulation.h"
 #include "fmu_instance.h"
 #include "rk45.h"
 
@@ -1381,3 +1382,5 @@ fmu_status_t cs_reset(fmu_instance_t *inst)
     cs_free(inst);
     return FMU_OK;
 }
+
+const fmu_stepper_t cs_stepper = {cs_free, cs_peaks_flush};

@@ -10,6 +10,7 @@
 
 #include "fmi2Functions.h"
 
+#include "cosimulation.h"
 #include "fmu_instance.h"
 
 #define MSG_SIZE 512
@@ -95,6 +96,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     if (inst == NULL) {
         return NULL;
     }
+    inst->stepper = &cs_stepper;
     inst->log_message = logger != NULL ? log_fmi2 : NULL;
     inst->logger = (fmu_callback_t)logger;
     inst->environment = env;

@@ -31,6 +31,7 @@
 #pragma GCC diagnostic pop
 #endif
 
+#include "cosimulation.h"
 #include "fmu_instance.h"
 
 #define MSG_SIZE 512
@@ -89,6 +90,7 @@ static fmu_instance_t *instantiate(const char *function, fmi3String instanceName
     if (inst == NULL) {
         return NULL;
     }
+    inst->stepper = &cs_stepper;
     inst->log_message = logger != NULL ? log_fmi3 : NULL;
     inst->logger = (fmu_callback_t)logger;
     inst->environment = env;

@@ -13,6 +13,21 @@
 
 #include "fmu_instance.h"
 
+/* the co-simulation stepper's hooks (fmu_stepper_t), where the front-end gave them */
+static void stepper_free(fmu_instance_t *inst)
+{
+    if (inst->stepper != NULL) {
+        inst->stepper->free(inst);
+    }
+}
+
+static void stepper_peaks_flush(fmu_instance_t *inst)
+{
+    if (inst->stepper != NULL) {
+        inst->stepper->peaks_flush(inst);
+    }
+}
+
 #define MSG_SIZE 512
 
 /* ------------------------------------------------------------------------------------------ */
@@ -209,7 +224,7 @@ void fmu_instance_free(fmu_instance_t *inst)
     if (inst == NULL) {
         return;
     }
-    cs_free(inst);
+    stepper_free(inst);
     states_free_all(inst); /* FMU states the importer did not free */
     free(inst->last_step_x);
     free(inst->vr_index);
@@ -220,7 +235,7 @@ void fmu_instance_free(fmu_instance_t *inst)
 
 void fmu_instance_reset(fmu_instance_t *inst)
 {
-    cs_free(inst);
+    stepper_free(inst);
     fmu_model.set_defaults(inst->model);
     inst->prepared = 0;
     inst->warned_outputs = 0;
@@ -325,7 +340,7 @@ fmu_status_t fmu_update_outputs(fmu_instance_t *inst, const char *function)
     if (fmu_prepare(inst, function) != FMU_OK) {
         return FMU_ERROR;
     }
-    cs_peaks_flush(inst); /* the peak outputs of the communication step */
+    stepper_peaks_flush(inst); /* the peak outputs of the communication step */
     char msg[MSG_SIZE];
     msg[0] = '\0';
     const int status = fmu_model.outputs(inst->model, msg, sizeof(msg));
@@ -597,7 +612,7 @@ fmu_status_t fmu_set_values(fmu_instance_t *inst, const char *function, const un
     }
     /* every value is valid: first the peaks of the communication step, with the values they
      * were taken with (a parameter changes them; kept if the new ones are rolled back) */
-    cs_peaks_flush(inst);
+    stepper_peaks_flush(inst);
     void *saved = NULL;
     if (tunable) { /* tunable parameters while running: apply, re-validate, roll back on failure */
         saved = malloc(fmu_model.size);
@@ -837,7 +852,7 @@ fmu_status_t fmu_state_get(fmu_instance_t *inst, const char *function, void **st
     } else if (!state_owned(inst, s, function)) {
         return FMU_ERROR;
     }
-    cs_peaks_flush(inst); /* the snapshot holds the peaks of the communication step */
+    stepper_peaks_flush(inst); /* the snapshot holds the peaks of the communication step */
     snapshot_take(inst, s);
     /* the integrator's history (step size, order, Nordsieck array) is not part of the snapshot,
      * and restoring restarts the integrator at the restored point. Restart it here as well, so

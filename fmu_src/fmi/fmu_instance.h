@@ -55,6 +55,14 @@ enum {
 typedef struct csfh_cvode csfh_cvode_t; /* opaque, cosimulation.c */
 typedef struct fmu_instance fmu_instance_t;
 
+/* What the instance asks of the co-simulation stepper (cosimulation.h: cs_stepper), set by the
+ * FMI front-end that made the instance; the instance does not call the stepper otherwise, so
+ * the dependencies go one way: front-end -> stepper -> instance -> model. */
+typedef struct {
+    void (*free)(fmu_instance_t *inst);        /* release the integrator (none: nothing) */
+    void (*peaks_flush)(fmu_instance_t *inst); /* bring the step's peak outputs up to date */
+} fmu_stepper_t;
+
 /* The front-end's logger: passes a formatted message to the importer's callback. */
 typedef void (*fmu_logger_t)(const fmu_instance_t *inst, fmu_status_t status,
                              const char *category, const char *message);
@@ -88,6 +96,7 @@ struct fmu_instance {
     const char *step_function; /* "fmi2DoStep" or "fmi3DoStep": the name in the stepper's messages */
     int event_mode_used;       /* FMI 3.0: the importer handles events in Event Mode */
     int early_return_allowed;  /* FMI 3.0: fmi3DoStep may return at an event */
+    const fmu_stepper_t *stepper; /* NULL: none (nothing to free or flush) */
     csfh_cvode_t *cvode;
     int cvode_needs_reinit; /* restart the integrator: states, inputs or tunable parameters were
                                changed from outside, an FMU state was taken or restored */
@@ -255,21 +264,5 @@ static inline double *fmu_derivatives(fmu_instance_t *inst)
 {
     return (double *)((char *)inst->model + fmu_model.der_offset);
 }
-
-/* ------------------------------------------------------------------------------------------ */
-/* co-simulation (cosimulation.c) */
-
-void cs_free(fmu_instance_t *inst);
-/* Integrate from the FMU's time to t_end (> the FMU's time; the caller checked the arguments).
- * stop_at_event: return at the first event inside the step that switches the discrete state
- * (csfh: a contact onset or release), handled, with the FMU's time = the event time and
- * *stopped = 1 (FMI 3.0 early return); else the step goes to t_end, however many events it
- * holds (*stopped = 0; stopped may be NULL). */
-fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end, int stop_at_event, int *stopped);
-fmu_status_t cs_reset(fmu_instance_t *inst);
-/* Bring the peak outputs of the communication step up to date (the co-simulation stepper
- * analyses RK45's steps for them only when needed): before the outputs are computed, an FMU
- * state is taken or values are set. Nothing without co-simulation. */
-void cs_peaks_flush(fmu_instance_t *inst);
 
 #endif

@@ -171,3 +171,90 @@ def test_imports_go_down_the_layers(module: str) -> None:
             f"{module} ({mine}, layer {LAYERS[mine]}) imports {target} "
             f"({theirs}, layer {LAYERS[theirs]})"
         )
+
+
+# ------------------------------------------------------------------------------------------
+# C: the same rule for the C sources of the FMUs and the libraries. A source file depends on
+# another when its object file uses a symbol the other one defines (nm on the build's objects:
+# the calls that really link, whatever the headers say); the FMI front-ends -> the stepper ->
+# the FMI-independent instance -> the model and the physics, never back.
+
+BUILD = PACKAGE.parents[1] / "build"
+C_TARGETS = (
+    "csfh_core", "csfh_fmu_common", "csfh_fmu", "csfh_fmu3",
+    "combdrive_fmu_common", "combdrive_fmu", "combdrive_fmu3", "csfh_batch",
+)  # fmt: skip
+
+
+def c_symbol_graph(objects: dict[str, list[Path]]) -> dict[str, set[str]]:
+    """{source: the sources whose global symbols its objects use}, from `nm` (gcc-nm reads
+    link-time-optimised objects too) on objects grouped by source."""
+    import shutil
+    import subprocess
+
+    nm = shutil.which("gcc-nm") or shutil.which("nm")
+    if nm is None:
+        pytest.skip("no nm")
+    defined: dict[str, set[str]] = {}
+    used: dict[str, set[str]] = {}
+    for source, paths in objects.items():
+        for path in paths:
+            out = subprocess.run([nm, str(path)], capture_output=True, text=True, check=True)
+            for line in out.stdout.splitlines():
+                fields = line.split()
+                if len(fields) >= 2 and fields[-2] == "U":
+                    used.setdefault(source, set()).add(fields[-1])
+                elif len(fields) == 3 and fields[1] in "TDBRC":
+                    defined.setdefault(source, set()).add(fields[2])
+    owner = {sym: src for src, syms in defined.items() for sym in syms}
+    return {
+        src: {owner[s] for s in syms if s in owner and owner[s] != src}
+        for src, syms in {**{s: set() for s in defined}, **used}.items()
+    }
+
+
+def build_objects() -> dict[str, list[Path]]:
+    """The build's current object files of fmu_src/ by source (an object older than its source
+    is left from another layout of the build and skipped)."""
+    found: dict[str, list[Path]] = {}
+    root = PACKAGE.parents[1]
+    for target in C_TARGETS:
+        for obj in sorted((BUILD / "CMakeFiles" / f"{target}.dir" / "fmu_src").rglob("*.o")):
+            source = obj.relative_to(BUILD / "CMakeFiles" / f"{target}.dir").with_suffix("")
+            src_path = root / source
+            if src_path.is_file() and obj.stat().st_mtime >= src_path.stat().st_mtime:
+                found.setdefault(str(source), []).append(obj)
+    return found
+
+
+def test_the_c_symbol_graph_finds_a_cycle(tmp_path: Path) -> None:
+    import shutil
+    import subprocess
+
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    (tmp_path / "a.c").write_text("int b(void);\nint a(void) { return b(); }\n")
+    (tmp_path / "b.c").write_text(
+        "int a(void);\nint b(void) { return 1; }\nint c(void) { return a(); }\n"
+    )
+    (tmp_path / "d.c").write_text("int a(void);\nint d(void) { return a(); }\n")
+    objects = {}
+    for name in ("a", "b", "d"):
+        subprocess.run([cc, "-c", f"{name}.c", "-o", f"{name}.o"], cwd=tmp_path, check=True)
+        objects[f"{name}.c"] = [tmp_path / f"{name}.o"]
+    graph = c_symbol_graph(objects)
+    assert graph == {"a.c": {"b.c"}, "b.c": {"a.c"}, "d.c": {"a.c"}}
+    assert cycles(graph) == [["a.c", "b.c"]]
+
+
+def test_no_cycles_between_the_c_sources() -> None:
+    objects = build_objects()
+    if "fmu_src/fmi/fmu_instance.c" not in objects:
+        pytest.skip(f"no current build of the FMUs in {BUILD}")
+    graph = c_symbol_graph(objects)
+    assert len(graph) >= 12, sorted(graph)
+    # the front-ends use the stepper, the stepper the instance, the instance the model
+    assert "fmu_src/fmi/cosimulation.c" in graph["fmu_src/fmi/fmi2_glue.c"]
+    assert "fmu_src/fmi/fmu_instance.c" in graph["fmu_src/fmi/cosimulation.c"]
+    assert cycles(graph) == []

@@ -1,0 +1,25 @@
+/* The co-simulation stepper (cosimulation.c): what the FMI front-ends (fmi2_glue.c,
+ * fmi3_glue.c) call. It works on the FMI-independent instance (fmu_instance.h) and never calls
+ * the front-ends; the instance reaches it only through the hooks of cs_stepper. */
+#ifndef CSFH_COSIMULATION_H
+#define CSFH_COSIMULATION_H
+
+#include "fmu_instance.h"
+
+/* The hooks the front-end gives every instance it makes (fmu_instance_t.stepper). */
+extern const fmu_stepper_t cs_stepper;
+
+void cs_free(fmu_instance_t *inst);
+/* Integrate from the FMU's time to t_end (> the FMU's time; the caller checked the arguments).
+ * stop_at_event: return at the first event inside the step that switches the discrete state
+ * (csfh: a contact onset or release), handled, with the FMU's time = the event time and
+ * *stopped = 1 (FMI 3.0 early return); else the step goes to t_end, however many events it
+ * holds (*stopped = 0; stopped may be NULL). */
+fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end, int stop_at_event, int *stopped);
+fmu_status_t cs_reset(fmu_instance_t *inst);
+/* Bring the peak outputs of the communication step up to date (the co-simulation stepper
+ * analyses RK45's steps for them only when needed): before the outputs are computed, an FMU
+ * state is taken or values are set. Nothing without co-simulation. */
+void cs_peaks_flush(fmu_instance_t *inst);
+
+#endif
