@@ -14,6 +14,8 @@ references with the same tolerances:
 
   (a3) model exchange, CVODE re-initialised only when fmi3UpdateDiscreteStates says so (and (b3)
        always),
+  (c3) model exchange, explicit Euler at the DefaultExperiment stepSize, time events (a shock
+       pulse's ends) ending a step,
   (d3) co-simulation with early return (earlyReturnAllowed, eventModeUsed), variable
        communication steps restarting at every lastSuccessfulTime, rollback through
        fmi3GetFMUState/SetFMUState (in memory and serialized); every contact onset must end a
@@ -41,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import extract
+from fmpy import extract, read_model_description
 
 import csfh
 from csfh.model.scene import Scene, load_scene
@@ -202,17 +204,23 @@ def test_me_cvode_importer_matches_fmpy(
     assert run.value("reinits") == len(ref_events)
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("scene_name", SCENES)
 def test_explicit_euler_at_the_default_step_stays_physical(
-    unzipped: str, model_description, tmp_path: Path, scene_name: str
+    request: pytest.FixtureRequest, tmp_path: Path, scene_name: str, fmi: int
 ) -> None:
-    """(c) explicit Euler with no settings but the DefaultExperiment: stepSize as the fixed step,
+    """(c), and (c3) on the FMI 3.0 build: explicit Euler with no settings but the
+    DefaultExperiment (each build's own modelDescription.xml): stepSize as the fixed step,
     stopTime as the end."""
-    h = float(model_description.defaultExperiment.stepSize)
-    stop = float(model_description.defaultExperiment.stopTime)
+    fmu_dir = request.getfixturevalue("unzipped" if fmi == 2 else "unzipped3")
+    experiment = read_model_description(fmu_dir).defaultExperiment
+    h = float(experiment.stepSize)
+    stop = float(experiment.stopTime)
     scene = load_scene(scene_name)
     assert stop == scene.stop_time
-    run = run_importer("me_euler", unzipped, scene, tmp_path, "--interval", "1e-3")
+    run = run_importer(
+        "me_euler" if fmi == 2 else "fmi3_me_euler", fmu_dir, scene, tmp_path, "--interval", "1e-3"
+    )
     assert run.value("t_reached") == pytest.approx(stop, abs=1e-12)
     assert run.value("steps") == round(stop / h)
     ref = reference(scene_name)
@@ -234,6 +242,44 @@ def test_explicit_euler_at_the_default_step_stays_physical(
     # the first onset: detected at the end of the step that crosses, at most one step (plus the
     # drift above, ~1e-6 m at ~0.8 m/s) late
     assert first <= run.event_times[0] <= first + 2 * h
+    if fmi == 3:
+        # the same fixed steps through the FMI 2.0 importer on the FMI 2.0 build (the same model,
+        # equal to 1e-10 in test_fmi3.py): the same events at the same steps, and the same
+        # trajectory to 1e-10 m (rounding, not method error: Euler's is ~1e-6 m)
+        run2 = run_importer(
+            "me_euler",
+            request.getfixturevalue("unzipped"),
+            scene,
+            tmp_path,
+            "--interval",
+            "1e-3",
+            tag="fmi2",
+        )
+        np.testing.assert_array_equal(run.event_times, run2.event_times)
+        np.testing.assert_array_equal(run.table["time"], run2.table["time"])
+        for name in ("body1.x", "body1.y"):
+            np.testing.assert_allclose(run.table[name], run2.table[name], rtol=0, atol=1e-10)
+
+
+def test_fmi3_euler_ends_a_step_at_each_time_event(unzipped3: str, tmp_path: Path) -> None:
+    """(c3) with a shock pulse (docs/model.md §14.8): its start and end are time events
+    (nextEventTime), both off the grid of fixed steps; the importer cuts the step that would pass
+    each one so that it ends there, and the grid goes on unchanged (two more steps in all). In
+    free flight along x the pulse changes vx by -2 A T / pi; Euler's rectangle rule over the
+    pulse is exact to (pi h / T)^2 / 12 ~ 2e-5 relative (tested: 1e-4)."""
+    peak, start, duration, stop = 100.0, 0.0123456, 1e-3, 0.02
+    h = float(read_model_description(unzipped3).defaultExperiment.stepSize)
+    assert min(abs(t / h - round(t / h)) for t in (start, start + duration)) > 0.1  # off the grid
+    pulse = (f"shock.peak={peak!r}", f"shock.start={start!r}", f"shock.duration={duration!r}")
+    scene = load_scene("central")
+    args = ("--stop", str(stop), "--interval", "1e-3", *pulse)
+    run = run_importer("fmi3_me_euler", unzipped3, scene, tmp_path, *args)
+    np.testing.assert_allclose(run.event_times, [start, start + duration], rtol=0, atol=1e-15)
+    assert run.value("steps") == round(stop / h) + 2
+    assert run.value("t_reached") == pytest.approx(stop, abs=1e-12)
+    end = run.table["time"] == run.event_times[1]
+    vx = float(run.table["body1.vx"][end][0])
+    assert vx == pytest.approx(-2 * peak * duration / np.pi, rel=1e-4)
 
 
 @pytest.mark.parametrize("serialize", [False, True])
