@@ -247,6 +247,7 @@ WINE_IMPORTERS: list[tuple[str, tuple[str, ...], int]] = [
     ("cs_master", ("--rtol", "1e-8"), 0),  # (it logs no events)
     # the FMI 3.0 build through the FMI 3.0 importers (binaries/x86_64-windows/csfh.dll)
     ("fmi3_me_cvode", ("--mode", "flags", "--rtol", "1e-10", "--interval", "1e-3"), 4),
+    ("fmi3_me_euler", ("--interval", "1e-3"), 4),
     ("fmi3_cs_master", ("--rtol", "1e-8"), 4),  # (it logs its early returns: two contacts)
 ]
 IMPORTER_OUTPUTS = (*STATES, "contact.gap", "contact.F_N")
