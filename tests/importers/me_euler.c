@@ -6,7 +6,8 @@
  * (z > 0 to z <= 0 or back, as fmusim and FMUComplianceChecker test it) starts an event at the
  * end of the step (no root location: the event is up to one step late, as in those tools). After
  * the event iteration the states are read back when the FMU reports a change, and the indicators
- * are read again. Every step is recorded into the extremes of the summary (so a penetration
+ * are read again. Time events (nextEventTimeDefined) shorten the step that would pass
+ * nextEventTime so that it ends there; the grid of the fixed steps goes on unchanged. Every step is recorded into the extremes of the summary (so a penetration
  * between output points is seen); the CSV gets the output points every --interval (default: the
  * stepSize) and the state before each event. Common options: import_common.h. */
 #include <math.h>
@@ -19,7 +20,10 @@
 #define MAX_STATES 64
 #define MAX_INDICATORS 64
 
-static int event_iteration(importer_t *imp)
+/* Event Mode at the current time and state: the event iteration; returns 1 if the FMU changed
+ * the continuous states, 0 if not, -1 on failure. The next time event (or INFINITY) into
+ * *t_next. */
+static int event_iteration(importer_t *imp, double *t_next)
 {
     fmi2EventInfo info;
     int changed = 0;
@@ -33,6 +37,7 @@ static int event_iteration(importer_t *imp)
         }
         changed |= info.valuesOfContinuousStatesChanged;
     } while (info.newDiscreteStatesNeeded);
+    *t_next = info.nextEventTimeDefined ? info.nextEventTime : INFINITY;
     if (imp->api.EnterContinuousTimeMode(imp->c) > fmi2Warning) {
         return -1;
     }
@@ -59,7 +64,9 @@ int main(int argc, char **argv)
         return 2;
     }
     const double tol = isfinite(imp.run.opt.rtol) ? imp.run.opt.rtol : imp.run.md.tolerance;
-    if (imp_initialize(&imp, fmi2ModelExchange, tol) > fmi2Warning || event_iteration(&imp) < 0) {
+    double t_next = INFINITY;
+    if (imp_initialize(&imp, fmi2ModelExchange, tol) > fmi2Warning ||
+        event_iteration(&imp, &t_next) < 0) {
         imp_fail(&imp.run, "initialization failed");
         return imp_close(&imp);
     }
@@ -72,61 +79,79 @@ int main(int argc, char **argv)
     imp_record(&imp, t0, 1);
     const long n_steps = (long)ceil((t_stop - t0) / h - 1e-9);
     const long every = (long)fmax(1.0, floor(dt_out / h + 0.5));
-    for (long n = 1; n <= n_steps; n++) {
-        if (n > imp.run.opt.max_steps) {
-            imp_fail(&imp.run, "budget: more than %ld steps", imp.run.opt.max_steps);
-            break;
-        }
-        const double t = n == n_steps ? t_stop : t0 + (double)n * h;
-        const double dt = t - imp.run.t_reached;
-        if (imp.api.GetDerivatives(imp.c, dx, (size_t)nx) > fmi2Warning) {
-            imp_fail(&imp.run, "fmi2GetDerivatives failed at t = %.17g", imp.run.t_reached);
-            break;
-        }
-        for (int i = 0; i < nx; i++) {
-            x[i] += dt * dx[i];
-        }
-        if (imp.api.SetTime(imp.c, t) > fmi2Warning ||
-            imp.api.SetContinuousStates(imp.c, x, (size_t)nx) > fmi2Warning) {
-            imp_fail(&imp.run, "the FMU refused the state at t = %.17g", t);
-            break;
-        }
-        imp.run.t_reached = t;
-        imp.run.steps++;
-        fmi2Boolean enter = fmi2False, terminate = fmi2False;
-        if (imp.api.CompletedIntegratorStep(imp.c, fmi2True, &enter, &terminate) > fmi2Warning ||
-            terminate) {
-            imp_fail(&imp.run, "fmi2CompletedIntegratorStep failed or asked to terminate");
-            break;
-        }
-        int event = enter;
-        if (nz > 0) {
-            if (imp.api.GetEventIndicators(imp.c, z, (size_t)nz) > fmi2Warning) {
-                imp_fail(&imp.run, "fmi2GetEventIndicators failed at t = %.17g", t);
+    int failed = 0;
+    for (long n = 1; n <= n_steps && !failed; n++) {
+        const double t_grid = n == n_steps ? t_stop : t0 + (double)n * h;
+        while (imp.run.t_reached < t_grid) { /* one step, or two when a time event cuts it */
+            if (imp.run.steps >= imp.run.opt.max_steps) {
+                imp_fail(&imp.run, "budget: more than %ld steps", imp.run.opt.max_steps);
+                failed = 1;
                 break;
             }
-            for (int j = 0; j < nz; j++) {
-                event |= (z_prev[j] > 0 && z[j] <= 0) || (z_prev[j] <= 0 && z[j] > 0);
-                z_prev[j] = z[j];
-            }
-        }
-        const int output = n % every == 0 || n == n_steps;
-        if (imp_record(&imp, t, output || event) > fmi2Warning) {
-            break;
-        }
-        if (event) {
-            const int changed = event_iteration(&imp);
-            if (changed < 0) {
-                imp_fail(&imp.run, "the event iteration failed at t = %.17g", t);
+            /* a time event strictly inside the step ends it (one at or before the current time
+             * would not advance: it is taken at the end of the step, as a state event) */
+            const double t =
+                (t_next > imp.run.t_reached && t_next < t_grid) ? t_next : t_grid;
+            const double dt = t - imp.run.t_reached;
+            if (imp.api.GetDerivatives(imp.c, dx, (size_t)nx) > fmi2Warning) {
+                imp_fail(&imp.run, "fmi2GetDerivatives failed at t = %.17g", imp.run.t_reached);
+                failed = 1;
                 break;
             }
-            imp_event(&imp.run, t, changed ? "reinit-requested" : "event");
-            if ((changed && imp.api.GetContinuousStates(imp.c, x, (size_t)nx) > fmi2Warning) ||
-                (nz > 0 && imp.api.GetEventIndicators(imp.c, z_prev, (size_t)nz) > fmi2Warning)) {
-                imp_fail(&imp.run, "cannot read the states after the event at t = %.17g", t);
+            for (int i = 0; i < nx; i++) {
+                x[i] += dt * dx[i];
+            }
+            if (imp.api.SetTime(imp.c, t) > fmi2Warning ||
+                imp.api.SetContinuousStates(imp.c, x, (size_t)nx) > fmi2Warning) {
+                imp_fail(&imp.run, "the FMU refused the state at t = %.17g", t);
+                failed = 1;
                 break;
             }
-            imp.run.reinits += changed;
+            imp.run.t_reached = t;
+            imp.run.steps++;
+            fmi2Boolean enter = fmi2False, terminate = fmi2False;
+            if (imp.api.CompletedIntegratorStep(imp.c, fmi2True, &enter, &terminate) >
+                    fmi2Warning ||
+                terminate) {
+                imp_fail(&imp.run, "fmi2CompletedIntegratorStep failed or asked to terminate");
+                failed = 1;
+                break;
+            }
+            int event = enter || t >= t_next;
+            if (nz > 0) {
+                if (imp.api.GetEventIndicators(imp.c, z, (size_t)nz) > fmi2Warning) {
+                    imp_fail(&imp.run, "fmi2GetEventIndicators failed at t = %.17g", t);
+                    failed = 1;
+                    break;
+                }
+                for (int j = 0; j < nz; j++) {
+                    event |= (z_prev[j] > 0 && z[j] <= 0) || (z_prev[j] <= 0 && z[j] > 0);
+                    z_prev[j] = z[j];
+                }
+            }
+            const int output = t >= t_grid && (n % every == 0 || n == n_steps);
+            if (imp_record(&imp, t, output || event) > fmi2Warning) {
+                failed = 1;
+                break;
+            }
+            if (event) {
+                const int changed = event_iteration(&imp, &t_next);
+                if (changed < 0) {
+                    imp_fail(&imp.run, "the event iteration failed at t = %.17g", t);
+                    failed = 1;
+                    break;
+                }
+                imp_event(&imp.run, t, changed ? "reinit-requested" : "event");
+                if ((changed &&
+                     imp.api.GetContinuousStates(imp.c, x, (size_t)nx) > fmi2Warning) ||
+                    (nz > 0 &&
+                     imp.api.GetEventIndicators(imp.c, z_prev, (size_t)nz) > fmi2Warning)) {
+                    imp_fail(&imp.run, "cannot read the states after the event at t = %.17g", t);
+                    failed = 1;
+                    break;
+                }
+                imp.run.reinits += changed;
+            }
         }
     }
     return imp_close(&imp);

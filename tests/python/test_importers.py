@@ -261,19 +261,23 @@ def test_explicit_euler_at_the_default_step_stays_physical(
             np.testing.assert_allclose(run.table[name], run2.table[name], rtol=0, atol=1e-10)
 
 
-def test_fmi3_euler_ends_a_step_at_each_time_event(unzipped3: str, tmp_path: Path) -> None:
-    """(c3) with a shock pulse (docs/model.md §14.8): its start and end are time events
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_euler_ends_a_step_at_each_time_event(
+    unzipped: str, unzipped3: str, tmp_path: Path, fmi: int
+) -> None:
+    """(c) and (c3) with a shock pulse (docs/model.md §14.8): its start and end are time events
     (nextEventTime), both off the grid of fixed steps; the importer cuts the step that would pass
     each one so that it ends there, and the grid goes on unchanged (two more steps in all). In
     free flight along x the pulse changes vx by -2 A T / pi; Euler's rectangle rule over the
     pulse is exact to (pi h / T)^2 / 12 ~ 2e-5 relative (tested: 1e-4)."""
+    fmu_dir = unzipped if fmi == 2 else unzipped3
     peak, start, duration, stop = 100.0, 0.0123456, 1e-3, 0.02
-    h = float(read_model_description(unzipped3).defaultExperiment.stepSize)
+    h = float(read_model_description(fmu_dir).defaultExperiment.stepSize)
     assert min(abs(t / h - round(t / h)) for t in (start, start + duration)) > 0.1  # off the grid
     pulse = (f"shock.peak={peak!r}", f"shock.start={start!r}", f"shock.duration={duration!r}")
     scene = load_scene("central")
     args = ("--stop", str(stop), "--interval", "1e-3", *pulse)
-    run = run_importer("fmi3_me_euler", unzipped3, scene, tmp_path, *args)
+    run = run_importer("me_euler" if fmi == 2 else "fmi3_me_euler", fmu_dir, scene, tmp_path, *args)
     np.testing.assert_allclose(run.event_times, [start, start + duration], rtol=0, atol=1e-15)
     assert run.value("steps") == round(stop / h) + 2
     assert run.value("t_reached") == pytest.approx(stop, abs=1e-12)
