@@ -169,6 +169,52 @@ def guid_of(spec: dict) -> str:
 # modelDescription.xml
 
 
+def type_attributes(v: dict, units: dict, derivative: str | None) -> list[str]:
+    """The attributes of a variable's type, the same in FMI 2.0 (on its type element) and FMI 3.0
+    (on the variable): declaredType, quantity, unit, displayUnit, min, max, nominal, derivative
+    (the reference the caller gives: FMI 2.0's index, FMI 3.0's value reference), start."""
+    ta: list[str] = []
+    if v["type"] == "Enumeration":
+        ta.append(f'declaredType="{v["declaredType"]}"')
+    quantity = v.get("quantity", units.get(v.get("unit", ""), {}).get("quantity"))
+    if quantity and v["type"] == "Real":
+        ta.append(f"quantity={quoteattr(quantity)}")
+    for key in ("unit", "displayUnit"):
+        if key in v:
+            ta.append(f"{key}={quoteattr(v[key])}")
+    if "range" in v:
+        lo, hi, lo_open, hi_open = parse_range(v["range"])
+        if v["type"] == "Integer":
+            # open ends: the next integer inside
+            bounds = (lo + 1 if lo_open else lo, hi - 1 if hi_open else hi)
+            fmt_bound = lambda x: str(int(x))  # noqa: E731
+        else:
+            # FMI's min and max are inclusive: an open end is the next double inside, the
+            # extreme value the FMU's check accepts
+            bounds = (
+                math.nextafter(lo, math.inf) if lo_open and math.isfinite(lo) else lo,
+                math.nextafter(hi, -math.inf) if hi_open and math.isfinite(hi) else hi,
+            )
+            fmt_bound = fmt_xml_real
+        if math.isfinite(bounds[0]):
+            ta.append(f'min="{fmt_bound(bounds[0])}"')
+        if math.isfinite(bounds[1]):
+            ta.append(f'max="{fmt_bound(bounds[1])}"')
+    if "nominal" in v:
+        ta.append(f'nominal="{fmt_xml_real(v["nominal"])}"')
+    if derivative is not None:
+        ta.append(f'derivative="{derivative}"')
+    if "start" in v:
+        s = v["start"]
+        if v["type"] == "Boolean":
+            ta.append(f'start="{"true" if s else "false"}"')
+        elif v["type"] == "Real":
+            ta.append(f'start="{fmt_xml_real(s)}"')
+        else:
+            ta.append(f'start="{int(s)}"')
+    return ta
+
+
 def xml_model_description(
     spec: dict, guid: str, epoch: int, source_files: tuple[str, ...] = ()
 ) -> str:
@@ -277,45 +323,8 @@ def xml_model_description(
             attrs.append(f'initial="{v["initial"]}"')
         w(f"    <!-- index {i} -->")
         w("    <ScalarVariable " + " ".join(attrs) + ">")
-        ta: list[str] = []
-        if v["type"] == "Enumeration":
-            ta.append(f'declaredType="{v["declaredType"]}"')
-        quantity = v.get("quantity", units.get(v.get("unit", ""), {}).get("quantity"))
-        if quantity and v["type"] == "Real":
-            ta.append(f"quantity={quoteattr(quantity)}")
-        for key in ("unit", "displayUnit"):
-            if key in v:
-                ta.append(f"{key}={quoteattr(v[key])}")
-        if "range" in v:
-            lo, hi, lo_open, hi_open = parse_range(v["range"])
-            if v["type"] == "Integer":
-                # open ends: the next integer inside
-                bounds = (lo + 1 if lo_open else lo, hi - 1 if hi_open else hi)
-                fmt_bound = lambda x: str(int(x))  # noqa: E731
-            else:
-                # FMI's min and max are inclusive: an open end is the next double inside, the
-                # extreme value the FMU's check accepts
-                bounds = (
-                    math.nextafter(lo, math.inf) if lo_open and math.isfinite(lo) else lo,
-                    math.nextafter(hi, -math.inf) if hi_open and math.isfinite(hi) else hi,
-                )
-                fmt_bound = fmt_xml_real
-            if math.isfinite(bounds[0]):
-                ta.append(f'min="{fmt_bound(bounds[0])}"')
-            if math.isfinite(bounds[1]):
-                ta.append(f'max="{fmt_bound(bounds[1])}"')
-        if "nominal" in v:
-            ta.append(f'nominal="{fmt_xml_real(v["nominal"])}"')
-        if "derivative_of" in v:
-            ta.append(f'derivative="{index[v["derivative_of"]]}"')
-        if "start" in v:
-            s = v["start"]
-            if v["type"] == "Boolean":
-                ta.append(f'start="{"true" if s else "false"}"')
-            elif v["type"] == "Real":
-                ta.append(f'start="{fmt_xml_real(s)}"')
-            else:
-                ta.append(f'start="{int(s)}"')
+        derivative = str(index[v["derivative_of"]]) if "derivative_of" in v else None
+        ta = type_attributes(v, units, derivative)
         w(f"      <{v['type']} " + " ".join(ta) + "/>")
         w("    </ScalarVariable>")
     w("  </ModelVariables>")
@@ -535,41 +544,8 @@ def xml_model_description_fmi3(
         attrs.append(f'variability="{v["variability"]}"')
         if "initial" in v:
             attrs.append(f'initial="{v["initial"]}"')
-        if v["type"] == "Enumeration":
-            attrs.append(f'declaredType="{v["declaredType"]}"')
-        quantity = v.get("quantity", units.get(v.get("unit", ""), {}).get("quantity"))
-        if quantity and v["type"] == "Real":
-            attrs.append(f"quantity={quoteattr(quantity)}")
-        for key in ("unit", "displayUnit"):
-            if key in v:
-                attrs.append(f"{key}={quoteattr(v[key])}")
-        if "range" in v:
-            lo, hi, lo_open, hi_open = parse_range(v["range"])
-            if v["type"] == "Integer":
-                bounds = (lo + 1 if lo_open else lo, hi - 1 if hi_open else hi)
-                fmt_bound = lambda x: str(int(x))  # noqa: E731
-            else:
-                bounds = (
-                    math.nextafter(lo, math.inf) if lo_open and math.isfinite(lo) else lo,
-                    math.nextafter(hi, -math.inf) if hi_open and math.isfinite(hi) else hi,
-                )
-                fmt_bound = fmt_xml_real
-            if math.isfinite(bounds[0]):
-                attrs.append(f'min="{fmt_bound(bounds[0])}"')
-            if math.isfinite(bounds[1]):
-                attrs.append(f'max="{fmt_bound(bounds[1])}"')
-        if "nominal" in v:
-            attrs.append(f'nominal="{fmt_xml_real(v["nominal"])}"')
-        if "derivative_of" in v:
-            attrs.append(f'derivative="{by_name[v["derivative_of"]]["vr"]}"')
-        if "start" in v:
-            s = v["start"]
-            if v["type"] == "Boolean":
-                attrs.append(f'start="{"true" if s else "false"}"')
-            elif v["type"] == "Real":
-                attrs.append(f'start="{fmt_xml_real(s)}"')
-            else:
-                attrs.append(f'start="{int(s)}"')
+        derivative = by_name[v["derivative_of"]]["vr"] if "derivative_of" in v else None
+        attrs += type_attributes(v, units, None if derivative is None else str(derivative))
         w(f"    <{FMI3_TYPE[v['type']]} " + " ".join(attrs) + "/>")
     w("  </ModelVariables>")
 
