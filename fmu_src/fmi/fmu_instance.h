@@ -130,10 +130,11 @@ void fmu_instance_reset(fmu_instance_t *inst);
 /* ------------------------------------------------------------------------------------------ */
 /* logging and call checks */
 
+/* (cold: the compiler moves the paths that log, errors above all, out of the hot code) */
 void fmu_log(const fmu_instance_t *inst, fmu_status_t status, unsigned int category,
              const char *fmt, ...)
 #if defined(__GNUC__)
-    __attribute__((format(printf, 4, 5)))
+    __attribute__((format(printf, 4, 5), cold))
 #endif
     ;
 #define FMU_LOG_ERROR(inst, ...) fmu_log((inst), FMU_ERROR, LOG_STATUS_ERROR, __VA_ARGS__)
