@@ -212,7 +212,7 @@ def _one_step_solver(fmu: FMU2Model, rtol: float, t0: float):
         def apply(self, t: float, **_: Any) -> None:
             return None
 
-    class _Solver(CVodeSolver):  # type: ignore[misc]
+    class _Solver(CVodeSolver):
         """fmpy's solver, whose right-hand side and root function return -1 (CVODE then stops
         with a failure flag) instead of raising inside the ctypes callback, where the exception
         would be printed and lost; the first exception is kept in `callback_error`."""
@@ -631,7 +631,7 @@ def simulate_cs(
                 try:
                     chunk = loop.run(k, min(k + size, n), t)
                 except FMICallException as exc:
-                    t = exc.t  # type: ignore[attr-defined]
+                    t = exc.t
                     raise
                 do_step_time += chunk.seconds
                 t = float(chunk.times[-1])
