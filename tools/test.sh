@@ -43,4 +43,5 @@ python3 tools/model_citations.py check
 
 stage "lint"
 python3 -m ruff check python tests modelDescription benchmarks examples tools docs/conf.py
+python3 -m mypy
 printf '\n== all passed in %dm%02ds\n' $((SECONDS / 60)) $((SECONDS % 60))

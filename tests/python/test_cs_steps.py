@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import re
 from ctypes import CFUNCTYPE, POINTER, c_double, c_int, c_size_t, c_uint, c_void_p
+from pathlib import Path
 from typing import Any
 
+import fmpy
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
@@ -240,3 +242,29 @@ def test_c_loop_stops_at_the_failed_call(
     # the steps before the failed one come back, on simulate_cs's grid, bitwise
     assert exc.chunk.times.tolist() == python_grid(k_first, failed, h, t_end)
     assert len(fake.steps) == failed - k_first + 1  # nothing called after the failure
+
+
+def test_a_chunk_keeps_its_values_after_the_next_one() -> None:
+    """The output buffers are re-used from one C call to the next; a returned chunk is its own
+    copy (a smaller second chunk would otherwise overwrite the first one's rows)."""
+    h, t_end = 0.1, 1.1
+    loop = cs_steps.CSteps(FakeSlave(), h, t_end, [1, 2], [3], [4])
+    first = loop.run(0, 6, 0.0)
+    before = (first.times.copy(), first.reals.copy(), first.integers.copy(), first.booleans.copy())
+    second = loop.run(6, 11, float(first.times[-1]))
+    after = (first.times, first.reals, first.integers, first.booleans)
+    for old, new in zip(before, after, strict=True):
+        assert new.tobytes() == old.tobytes()
+    assert second.times.tolist() == python_grid(6, 11, h, t_end)
+
+
+@pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="needs Linux's /proc")
+def test_the_fmu_binary_stays_loaded_between_runs() -> None:
+    """fmpy unloads the FMU's binary at fmi2FreeInstance; the runners hold a reference, so that
+    the next run does not load, relocate and bind it again: after a run has freed its instance,
+    the binary is still mapped, and the next run on it gives the same trajectory."""
+    scene = load_scene("central")
+    first = simulate_cs(scene, "LN_spheres", stop_time=0.1)
+    binary = Path(fmu_runner.unzipped_fmu(), "binaries", fmpy.platform, "csfh.so").resolve()
+    assert str(binary) in Path("/proc/self/maps").read_text()
+    assert_identical(first, simulate_cs(scene, "LN_spheres", stop_time=0.1))

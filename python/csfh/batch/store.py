@@ -24,7 +24,7 @@ import zipfile
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -171,18 +171,19 @@ class ResultStore:
     ) -> None:
         """Store results: signal files first (each whole, then renamed), then one index line
         each, appended under the lock with one fsync for all."""
-        lines, records = [], []
+        lines: list[str] = []
+        records: list[dict[str, Any]] = []
         for task, summary, signals, wall_time in results:
             rel, digest = None, None
             if signals is not None:
                 rel = f"signals/{task.key}.npz"
                 buffer = io.BytesIO()
-                np.savez_compressed(buffer, **signals)
+                np.savez_compressed(buffer, **cast(dict[str, Any], signals))
                 payload = buffer.getvalue()
                 digest = hashlib.sha256(payload).hexdigest()
                 (self.directory / "signals").mkdir(exist_ok=True)
                 replace_file(self.directory / rel, payload)
-            rec = {
+            rec: dict[str, Any] = {
                 "key": task.key,
                 "model": task.model,
                 "parameters": dict(task.parameters),

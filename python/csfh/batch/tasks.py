@@ -37,6 +37,11 @@ impact peak does not depend on where the grid happens to cut it."""
 _FMU_LOCK = threading.Lock()  # fmpy instances in one process: one run at a time (Dask threads)
 
 
+def _current_binaries() -> str:
+    """The fingerprint of the binaries in use (binaries_fingerprint), a Task's default."""
+    return binaries_fingerprint()
+
+
 @dataclass(frozen=True)
 class Task:
     """One model run: `scene` with `parameters` overridden, up to `stop_time`, outputs on a grid
@@ -50,7 +55,7 @@ class Task:
     interface: str = "me"
     signals: bool = True
     meta: tuple[tuple[str, Any], ...] = field(default=(), compare=False)
-    binaries: str = field(default_factory=lambda: binaries_fingerprint())
+    binaries: str = field(default_factory=_current_binaries)
 
     @cached_property
     def key(self) -> str:

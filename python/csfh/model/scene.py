@@ -419,13 +419,13 @@ def load_scene(scene: str | Path) -> Scene:
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
             raise SceneError(f"{path}: no such scene file")
-        data = path.read_bytes()
+        raw = path.read_bytes()
         try:
-            text = data.decode("utf-8")
+            text = raw.decode("utf-8")
         except UnicodeDecodeError as exc:
-            line = data[: exc.start].count(b"\n") + 1
+            line = raw[: exc.start].count(b"\n") + 1
             raise SceneError(
-                f"{path}: not UTF-8 text (TOML files are UTF-8): byte 0x{data[exc.start]:02x} "
+                f"{path}: not UTF-8 text (TOML files are UTF-8): byte 0x{raw[exc.start]:02x} "
                 f"at line {line}"
             ) from None
         source = str(path)

@@ -294,9 +294,9 @@ def cs_batch(
     out_vr = [vr_type(n)[0] for n in names]
     out_type = [vr_type(n)[1] for n in names]
     out_reduce = [REDUCTIONS[o[1]] for o in outs]
-    out_arg = [names.index(o[2]) if len(o) == 3 else 0 for o in outs]  # type: ignore[misc]
+    out_arg = [names.index(o[2]) if len(o) == 3 else 0 for o in outs]
     for o in outs:
-        if len(o) == 3 and o[2] not in names:  # type: ignore[misc]
+        if len(o) == 3 and o[2] not in names:
             raise ValueError(f"{o!r}: the trigger must be one of the outputs")
 
     rows = [start_values(scene, law, p) for p in parameter_sets]

@@ -17,6 +17,7 @@ from ctypes import POINTER, Structure, c_double, c_int, c_longlong, c_size_t, c_
 from ctypes import cast as ctypes_cast
 from dataclasses import dataclass
 from functools import cache
+from time import perf_counter
 from typing import Any
 
 import numpy as np
@@ -135,41 +136,56 @@ class CSteps:
         )
         self.counts = (len(reals), len(integers), len(booleans))
         self._failure = (c_int * 2)()
+        self._capacity = 0
+        self._grow(0)
+
+    def _grow(self, rows: int) -> None:
+        """Output buffers for chunks of up to `rows` steps, re-used from chunk to chunk, and
+        their addresses: numpy's ctypes addresses cost ~2 us each, as much as a communication
+        step of the FMU, so they are taken once per buffer, not per call."""
+        nr, ni, nb = self.counts
+        self._capacity = rows
+        self._times = np.empty(rows)
+        self._reals = np.empty((rows, nr))
+        self._integers = np.empty((rows, ni), dtype=np.int32)
+        self._booleans = np.empty((rows, nb), dtype=np.int32)
+        self._addresses = tuple(
+            a.ctypes.data for a in (self._times, self._reals, self._integers, self._booleans)
+        )
 
     def run(self, k_first: int, k_last: int, t: float) -> Chunk:
         """Steps k_first .. k_last - 1 from time t (the grid time before step k_first). Raises
         fmpy's FMICallException for a call that returned fmi2Error or worse, with `t` (the time
         the failed step started from, or reached if reading its outputs failed) and `chunk` (the
         steps before it) attached."""
-        from time import perf_counter
-
         m = k_last - k_first
-        nr, ni, nb = self.counts
-        times = np.empty(m)
-        reals = np.empty((m, nr))
-        integers = np.empty((m, ni), dtype=np.int32)
-        booleans = np.empty((m, nb), dtype=np.int32)
+        if m > self._capacity:
+            self._grow(m)
+        times, reals, integers, booleans = self._addresses
         t0 = perf_counter()
         done = self._lib.csfh_cs_steps(
-            self._loop,
-            k_first,
-            k_last,
-            t,
-            times.ctypes.data,
-            reals.ctypes.data,
-            integers.ctypes.data,
-            booleans.ctypes.data,
-            self._failure,
+            self._loop, k_first, k_last, t, times, reals, integers, booleans, self._failure
         )
         seconds = perf_counter() - t0
         if done < 0:
             raise ValueError(f"csfh_cs_steps: bad arguments (steps {k_first} .. {k_last})")
-        chunk = Chunk(times[:done], reals[:done], integers[:done], booleans[:done], done, seconds)
+        # copies: the buffers are the next chunk's
+        rows = slice(0, max(done, 0))
+        chunk = Chunk(
+            self._times[rows].copy(),
+            self._reals[rows].copy(),
+            self._integers[rows].copy(),
+            self._booleans[rows].copy(),
+            done,
+            seconds,
+        )
         call, status = self._failure
         if call >= 0:
             exc = FMICallException(function=_CALLS[call], status=status)
             reached = call > 0  # fmi2DoStep went through, reading its outputs failed
-            exc.t = float(times[done]) if reached else float(times[done - 1]) if done else t
+            exc.t = (
+                float(self._times[done]) if reached else float(self._times[done - 1]) if done else t
+            )
             exc.chunk = chunk
             raise exc
         return chunk

@@ -40,6 +40,7 @@ import statistics
 import time
 from collections.abc import Callable
 from dataclasses import replace
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -167,7 +168,7 @@ def run_study(
         study.reference_checks["Moreau"] = {m: change[m] for m in RIGID_METRICS}
         compliant_ref = refs.get("LN_spheres")
         for h in settings.get("Moreau", []):
-            tr, wall = _median_run(lambda h=h: moreau(sc, h=h), repeats)
+            tr, wall = _median_run(partial(moreau, sc, h=h), repeats)
             study.points.append(
                 _point(
                     "Moreau",

@@ -219,7 +219,7 @@ def compare_with_paper(
             rows.setdefault(key, key)
         elif reading == "paper":
             rows[p.paper_row] = key
-    cells = []
+    cells: list[dict[str, Any]] = []
     for row, key in rows.items():
         paper = paper_levels(group, row)
         if paper is None:

@@ -68,7 +68,7 @@ def sweep_tasks(spec: SweepSpec) -> list[Task]:
     """Nominal + two perturbed runs per parameter, for every model. Deterministic order."""
     tasks: list[Task] = []
     for model in spec.models:
-        common = {
+        common: dict[str, Any] = {
             "model": model,
             "stop_time": spec.stop_time,
             "output_interval": spec.output_interval,
