@@ -58,6 +58,7 @@
 #include <float.h>
 #include <limits.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -112,7 +113,11 @@ typedef struct {
 } peak_record_t;
 
 struct csfh_cvode {
+    /* SUNDIALS' objects, made when CVODE first runs (a run that RK45 takes alone never touches
+     * SUNDIALS): its context, and vectors that wrap our arrays y and abstol, and any array
+     * CVodeGetDky writes to (work) */
     SUNContext ctx;
+    N_Vector ny, nabstol, nwork;
     int method;             /* the integrator running: FMU_CS_BDF, FMU_CS_ADAMS or FMU_CS_RK45 */
     /* CVODE (BDF, Adams); its memory is kept while RK45 runs */
     void *mem;
@@ -120,7 +125,7 @@ struct csfh_cvode {
     int mem_stop_set;       /* CVODE holds a stop time it has not reached, mem_stop (local; SUNDIALS
                                6.4 clears it only when reached, CVodeReInit keeps it) */
     double mem_stop;
-    N_Vector abstol;
+    double *abstol;         /* absolute tolerances (NX) */
     SUNMatrix J;
     SUNLinearSolver LS;
     SUNNonlinearSolver NLS; /* fixed-point iteration (Adams) */
@@ -133,9 +138,9 @@ struct csfh_cvode {
      * segment's first step is taken */
     double event_h[FMU_EVENT_KINDS];
     int hint_code;
-    N_Vector y;             /* the integrator's solution at the time it returned */
+    double *y;              /* the integrator's solution at the time it returned (NX) */
     double tolerance;       /* the relative tolerance the solver was set up with */
-    N_Vector y_root;  /* a root (or time event) reported beyond the end of the last */
+    double *y_root;   /* a root (or time event) reported beyond the end of the last */
     double t_root;    /* communication step: the state there and its time, */
     int root_pending; /* STEP_ROOT, STEP_TSTOP or STEP_SWITCH, handled in the communication
                          step that contains it (0: none) */
@@ -151,7 +156,7 @@ struct csfh_cvode {
     int next_holdoff;
     double nonstiff_h;      /* mean step of the non-stiff method in the window before the trial */
     /* peak outputs (fmu_model.n_peaks > 0, track_peaks): CVODE's steps, analysed when taken */
-    N_Vector peak_y, peak_dy; /* work vectors */
+    double *peak_y, *peak_dy; /* work arrays (NX) */
     double peak_t;            /* the end of the last analysed step: */
     int peak_slope_valid;     /* its slopes and values there are valid */
     double peak_slope[FMU_MAX_PEAKS];
@@ -161,15 +166,17 @@ struct csfh_cvode {
     double peak_max_v[FMU_MAX_PEAKS][FMU_MAX_PEAKS];
     /* ... RK45's steps, kept and analysed when the peaks are read (peak_log_*) */
     double comm_start;        /* the communication step being taken: (comm_start, FMU time] */
+    void *peak_room;          /* one block, allocated at the first step kept, for: */
     peak_record_t *log;       /* the steps that may still hold peaks of it, in order */
     double *log_data;         /* their RK45 records (RK45_RECORD_SIZE(NX) each) */
-    int log_n, log_cap;       /* (allocated as needed, up to PEAK_LOG_MAX) */
-    unsigned char *snap;      /* copies of the model, for the discrete state each step ran with */
-    int snap_n, snap_cap;     /* (up to PEAK_SNAPSHOTS) */
+    int log_n;                /* (up to PEAK_LOG_MAX) */
+    unsigned char *snap;      /* the discrete states the steps ran with (peaks_state_save) */
+    int snap_n;               /* (up to PEAK_SNAPSHOTS) */
     int snap_stale;           /* the discrete state changed since the last copy */
-    void *scratch;            /* the model's own discrete state while analysing */
+    void *scratch;            /* the model's own one while analysing */
     double origin;      /* s: the integrator's time 0 (see the top of this file); its times are local */
     long warnings;      /* CVODE warnings so far (error_handler) */
+    double arrays[];    /* y, abstol, y_root, peak_y, peak_dy: one block with the struct */
 };
 
 static const char *method_name(int method)
@@ -249,6 +256,39 @@ static void error_handler(int error_code, const char *module, const char *functi
     }
 }
 
+/* SUNDIALS' context and the vectors that wrap our arrays (after everything made with them). */
+static void cvode_objects_free(csfh_cvode_t *cv)
+{
+    N_Vector *vectors[] = {&cv->ny, &cv->nabstol, &cv->nwork}; /* (the arrays are ours) */
+    for (size_t i = 0; i < sizeof(vectors) / sizeof(vectors[0]); i++) {
+        if (*vectors[i] != NULL) {
+            N_VDestroy(*vectors[i]);
+            *vectors[i] = NULL;
+        }
+    }
+    if (cv->ctx != NULL) {
+        SUNContext_Free(&cv->ctx);
+        cv->ctx = NULL;
+    }
+}
+
+/* ... made when CVODE first runs: 0, or -1 with nothing made. */
+static int cvode_objects(csfh_cvode_t *cv)
+{
+    if (SUNContext_Create(NULL, &cv->ctx) != 0) {
+        cv->ctx = NULL;
+        return -1;
+    }
+    cv->ny = N_VMake_Serial(NX, cv->y, cv->ctx);
+    cv->nabstol = N_VMake_Serial(NX, cv->abstol, cv->ctx);
+    cv->nwork = N_VMake_Serial(NX, cv->y, cv->ctx);
+    if (cv->ny == NULL || cv->nabstol == NULL || cv->nwork == NULL) {
+        cvode_objects_free(cv);
+        return -1;
+    }
+    return 0;
+}
+
 void cs_free(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
@@ -268,19 +308,8 @@ void cs_free(fmu_instance_t *inst)
     if (cv->J != NULL) {
         SUNMatDestroy(cv->J);
     }
-    free(cv->log);
-    free(cv->log_data);
-    free(cv->snap);
-    free(cv->scratch);
-    N_Vector *vectors[] = {&cv->y, &cv->abstol, &cv->y_root, &cv->peak_y, &cv->peak_dy};
-    for (size_t i = 0; i < sizeof(vectors) / sizeof(vectors[0]); i++) {
-        if (*vectors[i] != NULL) {
-            N_VDestroy(*vectors[i]);
-        }
-    }
-    if (cv->ctx != NULL) {
-        SUNContext_Free(&cv->ctx);
-    }
+    free(cv->peak_room);
+    cvode_objects_free(cv);
     free(cv);
     inst->cvode = NULL;
 }
@@ -339,12 +368,13 @@ static double solver_last_step(const csfh_cvode_t *cv)
 
 /* The state (k = 0) or its derivative (k = 1) at t inside the last step, from the integrator's
  * interpolant: 0, or < 0 outside it. */
-static int solver_dense(const csfh_cvode_t *cv, double t, int k, N_Vector out)
+static int solver_dense(const csfh_cvode_t *cv, double t, int k, double *out)
 {
     if (cv->method == FMU_CS_RK45) {
-        return rk45_dense(cv->rk, t, k, N_VGetArrayPointer(out));
+        return rk45_dense(cv->rk, t, k, out);
     }
-    return CVodeGetDky(cv->mem, t, k, out);
+    N_VSetArrayPointer(out, cv->nwork);
+    return CVodeGetDky(cv->mem, t, k, cv->nwork);
 }
 
 /* Steps, failed steps and steps at the stability limit (RK45) since the last (re)start. */
@@ -390,20 +420,18 @@ static fmu_status_t solver_start(fmu_instance_t *inst, int method, double tau, d
             cv->rk = rk45_create(NX, fmu_model.n_event_indicators, rk_rhs,
                                  fmu_model.n_event_indicators > 0 ? rk_roots : NULL, inst);
             if (cv->rk == NULL ||
-                rk45_set_tolerances(cv->rk, inst->tolerance, N_VGetArrayPointer(cv->abstol)) !=
-                    RK45_SUCCESS) {
+                rk45_set_tolerances(cv->rk, inst->tolerance, cv->abstol) != RK45_SUCCESS) {
                 return rk_check(inst, RK45_MEM_FAIL, "rk45_create");
             }
         }
         solver_started(cv);
         return rk_check(inst,
-                        rk45_init(cv->rk, tau, N_VGetArrayPointer(cv->y), FIRST_STEP_HORIZON,
-                                  h_first),
+                        rk45_init(cv->rk, tau, cv->y, FIRST_STEP_HORIZON, h_first),
                         "rk45_init");
     }
     if (cv->mem != NULL && cv->mem_method == method && !(cv->mem_stop_set && cv->mem_stop <= tau)) {
         solver_started(cv);
-        return cv_check(inst, CVodeReInit(cv->mem, tau, cv->y), "CVodeReInit");
+        return cv_check(inst, CVodeReInit(cv->mem, tau, cv->ny), "CVodeReInit");
     }
     /* new memory also where the old one holds a stop time at or behind tau: RK45 has passed it
      * since (auto), and CVODE would refuse to step */
@@ -411,13 +439,18 @@ static fmu_status_t solver_start(fmu_instance_t *inst, int method, double tau, d
     if (cv->mem != NULL) {
         CVodeFree(&cv->mem);
     }
+    if (cv->ctx == NULL && cvode_objects(cv) != 0) {
+        fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR,
+                "%s: cannot allocate SUNDIALS' context and vectors", inst->step_function);
+        return FMU_ERROR;
+    }
     cv->mem = CVodeCreate(method == FMU_CS_ADAMS ? CV_ADAMS : CV_BDF, cv->ctx);
     if (method == FMU_CS_ADAMS && cv->NLS == NULL) {
-        cv->NLS = SUNNonlinSol_FixedPoint(cv->y, 0, cv->ctx);
+        cv->NLS = SUNNonlinSol_FixedPoint(cv->ny, 0, cv->ctx);
     }
     if (method != FMU_CS_ADAMS && cv->J == NULL) {
         cv->J = SUNDenseMatrix(NX, NX, cv->ctx);
-        cv->LS = cv->J != NULL ? SUNLinSol_Dense(cv->y, cv->J, cv->ctx) : NULL;
+        cv->LS = cv->J != NULL ? SUNLinSol_Dense(cv->ny, cv->J, cv->ctx) : NULL;
     }
     if (cv->mem == NULL || (method == FMU_CS_ADAMS ? cv->NLS == NULL : cv->LS == NULL)) {
         fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: cannot allocate CVODE",
@@ -427,9 +460,9 @@ static fmu_status_t solver_start(fmu_instance_t *inst, int method, double tau, d
     cv->mem_method = method;
     solver_started(cv);
     fmu_status_t s = cv_check(inst, CVodeSetErrHandlerFn(cv->mem, error_handler, inst), "CVodeSetErrHandlerFn");
-    if (s == FMU_OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, tau, cv->y), "CVodeInit");
+    if (s == FMU_OK) s = cv_check(inst, CVodeInit(cv->mem, rhs, tau, cv->ny), "CVodeInit");
     if (s == FMU_OK) s = cv_check(inst, CVodeSetUserData(cv->mem, inst), "CVodeSetUserData");
-    if (s == FMU_OK) s = cv_check(inst, CVodeSVtolerances(cv->mem, inst->tolerance, cv->abstol), "CVodeSVtolerances");
+    if (s == FMU_OK) s = cv_check(inst, CVodeSVtolerances(cv->mem, inst->tolerance, cv->nabstol), "CVodeSVtolerances");
     if (s == FMU_OK && method == FMU_CS_ADAMS) {
         s = cv_check(inst, CVodeSetNonlinearSolver(cv->mem, cv->NLS), "CVodeSetNonlinearSolver");
     } else if (s == FMU_OK) {
@@ -449,7 +482,7 @@ static int solver_step(fmu_instance_t *inst, double *tret)
 {
     csfh_cvode_t *cv = inst->cvode;
     if (cv->method == FMU_CS_RK45) {
-        const int flag = rk45_step(cv->rk, tret, N_VGetArrayPointer(cv->y));
+        const int flag = rk45_step(cv->rk, tret, cv->y);
         if (flag < 0) {
             rk_check(inst, flag, "rk45_step");
             return STEP_FAILED;
@@ -459,7 +492,7 @@ static int solver_step(fmu_instance_t *inst, double *tret)
     /* tout only sets the size of the first step after a (re)start (CVODE's estimate is bounded
      * by a tenth of the distance to tout): a fixed horizon, so that the step sequence does not
      * depend on the communication grid */
-    const int flag = CVode(cv->mem, *tret + FIRST_STEP_HORIZON, cv->y, tret, CV_ONE_STEP);
+    const int flag = CVode(cv->mem, *tret + FIRST_STEP_HORIZON, cv->ny, tret, CV_ONE_STEP);
     if (flag < 0) {
         /* CVODE's message is already in the log (error_handler); add the flag */
         cv_check(inst, flag, "CVode");
@@ -608,30 +641,21 @@ static fmu_status_t cs_start(fmu_instance_t *inst)
     const int configured = configured_method(inst);
     const int method = configured == FMU_CS_AUTO ? FMU_CS_RK45 : configured;
     if (cv == NULL) {
-        cv = (csfh_cvode_t *)calloc(1, sizeof(*cv));
+        cv = (csfh_cvode_t *)calloc(1, sizeof(*cv) + 5 * (size_t)NX * sizeof(double));
         if (cv == NULL) {
             fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: out of memory", inst->step_function);
             return FMU_ERROR;
         }
         inst->cvode = cv;
         cv->tolerance = inst->tolerance;
-        if (SUNContext_Create(NULL, &cv->ctx) != 0) {
-            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: SUNContext_Create failed",
-                    inst->step_function);
-            cs_free(inst);
-            return FMU_ERROR;
-        }
-        cv->y = N_VNew_Serial(NX, cv->ctx);
-        cv->abstol = N_VNew_Serial(NX, cv->ctx);
-        cv->y_root = N_VNew_Serial(NX, cv->ctx);
-        if (cv->y == NULL || cv->abstol == NULL || cv->y_root == NULL) {
-            fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: cannot allocate the integrator",
-                    inst->step_function);
-            cs_free(inst);
-            return FMU_ERROR;
-        }
+        double *p = cv->arrays;
+        cv->y = p, p += NX;
+        cv->abstol = p, p += NX;
+        cv->y_root = p, p += NX;
+        cv->peak_y = p, p += NX;
+        cv->peak_dy = p;
         /* absolute tolerance: relative tolerance times the nominal value of each state */
-        double *atol = N_VGetArrayPointer(cv->abstol);
+        double *atol = cv->abstol;
         int k = 0;
         for (int i = 0; i < fmu_model.n_variables && k < NX; i++) {
             if (fmu_model.variables[i].is_state) {
@@ -639,7 +663,7 @@ static fmu_status_t cs_start(fmu_instance_t *inst)
             }
         }
     }
-    memcpy(N_VGetArrayPointer(cv->y), fmu_states(inst), NX * sizeof(double));
+    memcpy(cv->y, fmu_states(inst), NX * sizeof(double));
     cv->origin = *fmu_time(inst);
     memset(cv->event_h, 0, sizeof(cv->event_h)); /* a start from outside: no memory of events */
     cv->hint_code = 0;
@@ -703,15 +727,6 @@ typedef struct {
     double t0, tn, h;
 } peak_source_t;
 
-static int peak_work_vectors(csfh_cvode_t *cv)
-{
-    if (cv->peak_y == NULL) {
-        cv->peak_y = N_VClone(cv->y);
-        cv->peak_dy = N_VClone(cv->y);
-    }
-    return cv->peak_y != NULL && cv->peak_dy != NULL;
-}
-
 /* The peak quantities v at time t of the step, and their time derivatives in slope (a forward
  * difference along the derivative of the state); 0 when the model has nothing to track there.
  * y_at_t, f_at_t: the state and its derivative at t if known (else NULL: interpolated). */
@@ -720,7 +735,7 @@ static int peak_point(fmu_instance_t *inst, const peak_source_t *src, double t,
 {
     csfh_cvode_t *cv = inst->cvode;
     t = t < src->t0 ? src->t0 : (t > src->tn ? src->tn : t); /* round-off at the step's ends */
-    double *py = N_VGetArrayPointer(cv->peak_y), *pd = N_VGetArrayPointer(cv->peak_dy);
+    double *py = cv->peak_y, *pd = cv->peak_dy;
     if (y_at_t != NULL) {
         memcpy(py, y_at_t, NX * sizeof(double));
     } else if (src->record != NULL) {
@@ -872,6 +887,19 @@ static void peak_step(fmu_instance_t *inst, const double *y_end)
 
 /* --- RK45's steps, kept and analysed when needed ------------------------------------------ */
 
+/* The discrete states kept for the peaks: peaks_state_size bytes each, at the strictest
+ * alignment. */
+static size_t snapshot_stride(void)
+{
+    const size_t align = _Alignof(max_align_t);
+    return (fmu_model.peaks_state_size + align - 1) / align * align;
+}
+
+static unsigned char *snapshot(csfh_cvode_t *cv, int k)
+{
+    return cv->snap + (size_t)k * snapshot_stride();
+}
+
 static double *log_record(csfh_cvode_t *cv, int k)
 {
     return cv->log_data + (size_t)k * RK45_RECORD_SIZE(NX);
@@ -885,15 +913,17 @@ static void peak_log_clear(csfh_cvode_t *cv)
     cv->snap_stale = 1;
 }
 
-/* Put the model into the discrete state kept step k ran with (set), or back into its own. */
+/* Put the model into the discrete state kept step k ran with (set), or back into its own. Only
+ * that discrete state is saved (peaks_state_save into the scratch), not the whole model: a copy
+ * of the whole model (1.2 kB) for every analysed step was a tenth of the peaks' cost. */
 static void with_step_state(fmu_instance_t *inst, int k, int set)
 {
     csfh_cvode_t *cv = inst->cvode;
     if (set) {
-        memcpy(cv->scratch, inst->model, fmu_model.size);
-        fmu_model.peaks_state(inst->model, cv->snap + (size_t)cv->log[k].snapshot * fmu_model.size);
+        fmu_model.peaks_state_save(inst->model, cv->scratch);
+        fmu_model.peaks_state_restore(inst->model, snapshot(cv, cv->log[k].snapshot));
     } else {
-        fmu_model.peaks_state(inst->model, cv->scratch);
+        fmu_model.peaks_state_restore(inst->model, cv->scratch);
     }
 }
 
@@ -987,8 +1017,7 @@ static void peak_log_keep_from(csfh_cvode_t *cv, int first)
     }
     const int used = cv->log[0].snapshot; /* the snapshots are in the steps' order */
     if (used > 0) {
-        memmove(cv->snap, cv->snap + (size_t)used * fmu_model.size,
-                (size_t)(cv->snap_n - used) * fmu_model.size);
+        memmove(cv->snap, snapshot(cv, used), (size_t)(cv->snap_n - used) * snapshot_stride());
         cv->snap_n -= used;
         for (int k = 0; k < cv->log_n; k++) {
             cv->log[k].snapshot -= used;
@@ -1007,42 +1036,39 @@ static void peak_log_drop(csfh_cvode_t *cv, double t)
     peak_log_keep_from(cv, first > 0 ? first - 1 : 0);
 }
 
+/* The room for the kept steps, at its full size in one block (nothing is zeroed: a restart
+ * from outside frees nothing): the scratch copy of the model's discrete state and the
+ * snapshots of it (snapshot_stride() apart), the records, their RK45 data. Grown in steps
+ * instead, each growth copied the kept records (the larger part of the memory that a short run
+ * touched for the first time). */
+static int peak_room_alloc(csfh_cvode_t *cv)
+{
+    const size_t states = (1 + (size_t)PEAK_SNAPSHOTS) * snapshot_stride();
+    const size_t log = (size_t)PEAK_LOG_MAX * sizeof(peak_record_t);
+    const size_t data = (size_t)PEAK_LOG_MAX * RK45_RECORD_SIZE(NX) * sizeof(double);
+    unsigned char *room = (unsigned char *)malloc(states + log + data);
+    if (room == NULL) {
+        return 0;
+    }
+    cv->peak_room = room;
+    cv->scratch = room;
+    cv->snap = room + snapshot_stride();
+    cv->log = (peak_record_t *)(void *)(room + states);
+    cv->log_data = (double *)(void *)(room + states + log);
+    return 1;
+}
+
 /* Keep RK45's new step for the peaks (t_now: where the communication step has got to before
- * it); 0 if it cannot be kept (out of memory, or a model without peaks_state: the step is then
- * analysed now, as CVODE's). */
+ * it); 0 if it cannot be kept (out of memory, or a model without peaks_state_save: the step is
+ * then analysed now, as CVODE's). */
 static int peak_log_keep(fmu_instance_t *inst, double t_now)
 {
     csfh_cvode_t *cv = inst->cvode;
-    if (fmu_model.peaks_state == NULL) {
+    if (fmu_model.peaks_state_save == NULL) {
         return 0;
     }
-    /* room, allocated as needed (nothing is zeroed: a restart from outside frees nothing) */
-    if (cv->scratch == NULL && (cv->scratch = malloc(fmu_model.size)) == NULL) {
+    if (cv->peak_room == NULL && !peak_room_alloc(cv)) {
         return 0;
-    }
-    if (cv->log_n == cv->log_cap && cv->log_cap < PEAK_LOG_MAX) {
-        const int cap = cv->log_cap > 0 ? 2 * cv->log_cap : 8;
-        peak_record_t *log = (peak_record_t *)realloc(cv->log, (size_t)cap * sizeof(*log));
-        if (log == NULL) {
-            return 0;
-        }
-        cv->log = log;
-        double *data =
-            (double *)realloc(cv->log_data, (size_t)cap * RK45_RECORD_SIZE(NX) * sizeof(double));
-        if (data == NULL) {
-            return 0;
-        }
-        cv->log_data = data;
-        cv->log_cap = cap;
-    }
-    if (cv->snap_stale && cv->snap_n == cv->snap_cap && cv->snap_cap < PEAK_SNAPSHOTS) {
-        const int cap = cv->snap_cap > 0 ? 2 * cv->snap_cap : 2;
-        unsigned char *snap = (unsigned char *)realloc(cv->snap, (size_t)cap * fmu_model.size);
-        if (snap == NULL) {
-            return 0;
-        }
-        cv->snap = snap;
-        cv->snap_cap = cap;
     }
     if (cv->log_n == PEAK_LOG_MAX || (cv->snap_stale && cv->snap_n == PEAK_SNAPSHOTS)) {
         /* piled up in this communication step: analyse them now, keep the last (its end
@@ -1051,7 +1077,7 @@ static int peak_log_keep(fmu_instance_t *inst, double t_now)
         peak_log_keep_from(cv, cv->log_n - 1);
     }
     if (cv->snap_stale || cv->snap_n == 0) {
-        memcpy(cv->snap + (size_t)cv->snap_n * fmu_model.size, inst->model, fmu_model.size);
+        fmu_model.peaks_state_save(inst->model, snapshot(cv, cv->snap_n));
         cv->snap_n++;
         cv->snap_stale = 0;
     }
@@ -1088,7 +1114,7 @@ static void peak_log_event(csfh_cvode_t *cv, double t)
 void cs_peaks_flush(fmu_instance_t *inst)
 {
     csfh_cvode_t *cv = inst->cvode;
-    if (cv == NULL || cv->log_n == 0 || NX == 0 || !peak_work_vectors(cv)) {
+    if (cv == NULL || cv->log_n == 0 || NX == 0) {
         return;
     }
     const double now = *fmu_time(inst) - cv->origin;
@@ -1104,8 +1130,8 @@ void cs_peaks_flush(fmu_instance_t *inst)
 static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
 {
     csfh_cvode_t *cv = inst->cvode;
-    if (fmu_model.n_peaks <= 0 || !peak_work_vectors(cv)) {
-        return; /* (out of memory: the peaks fall back to the communication points) */
+    if (fmu_model.n_peaks <= 0) {
+        return;
     }
     if (fmu_model.peaks_tracked != NULL && !fmu_model.peaks_tracked(inst->model)) {
         peaks_forget(cv); /* nothing to track in this discrete state (out of contact) */
@@ -1129,7 +1155,7 @@ static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
             fmu_model.peaks_add(inst->model, cv->peak_end_v);
         }
         const double tn = solver_time(cv);
-        peak_step(inst, tb == tn ? N_VGetArrayPointer(cv->y) : NULL);
+        peak_step(inst, tb == tn ? cv->y : NULL);
         if (cv->peak_slope_valid && tb == cv->peak_t) {
             fmu_model.peaks_add(inst->model, cv->peak_end_v);
         }
@@ -1144,7 +1170,7 @@ static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
 /* Take the integrator's solution (local time tret, cv->y) as the model's time and state. */
 static void take_solution(fmu_instance_t *inst, double tret)
 {
-    memcpy(fmu_states(inst), N_VGetArrayPointer(inst->cvode->y), NX * sizeof(double));
+    memcpy(fmu_states(inst), inst->cvode->y, NX * sizeof(double));
     *fmu_time(inst) = inst->cvode->origin + tret;
     fmu_invalidate(inst);
 }
@@ -1235,7 +1261,7 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs, int stop_at_even
         int flag;
         const double tret_before = tret;
         if (cv->root_pending && cv->t_root <= t_end) {
-            memcpy(N_VGetArrayPointer(cv->y), N_VGetArrayPointer(cv->y_root), NX * sizeof(double));
+            memcpy(cv->y, cv->y_root, NX * sizeof(double));
             tret = cv->t_root;
             flag = cv->root_pending; /* STEP_ROOT, STEP_TSTOP or STEP_SWITCH */
             cv->root_pending = 0;
@@ -1266,7 +1292,7 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs, int stop_at_even
             }
             if (flag != STEP_FAILED && tret > t_end) {
                 if (flag != STEP_OK) { /* a root, time event or switch beyond t_end */
-                    memcpy(N_VGetArrayPointer(cv->y_root), N_VGetArrayPointer(cv->y), NX * sizeof(double));
+                    memcpy(cv->y_root, cv->y, NX * sizeof(double));
                     cv->t_root = tret;
                     cv->root_pending = flag;
                 }
@@ -1286,7 +1312,7 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs, int stop_at_even
             /* the integrator's message and flag are in the log; it returns the last successful
              * point in (tret, y): keep it, so that what the master reads is consistent (time,
              * state, discrete state), never a half-taken step */
-            const double *y = N_VGetArrayPointer(cv->y);
+            const double *y = cv->y;
             int finite = isfinite(tret) && tret >= now && tret <= t_end;
             for (int i = 0; i < NX; i++) {
                 finite = finite && isfinite(y[i]);

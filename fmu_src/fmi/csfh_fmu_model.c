@@ -147,9 +147,17 @@ static void peaks_add(void *mv, const double *v)
     }
 }
 
-static void peaks_state(void *m, const void *from)
+_Static_assert(CSFH_N_PEAKS <= FMU_MAX_PEAKS,
+               "the co-simulation stepper tracks at most FMU_MAX_PEAKS peak outputs");
+
+static void peaks_state_save(const void *m, void *state)
 {
-    ((csfh_model_t *)m)->z = ((const csfh_model_t *)from)->z;
+    *(csfh_discrete_t *)state = ((const csfh_model_t *)m)->z;
+}
+
+static void peaks_state_restore(void *m, const void *state)
+{
+    ((csfh_model_t *)m)->z = *(const csfh_discrete_t *)state;
 }
 
 static int peaks_tracked(const void *m)
@@ -226,7 +234,9 @@ const fmu_model_t fmu_model = {
     .peaks_begin = peaks_begin,
     .peak_values = peak_values,
     .peaks_add = peaks_add,
-    .peaks_state = peaks_state,
+    .peaks_state_size = sizeof(csfh_discrete_t),
+    .peaks_state_save = peaks_state_save,
+    .peaks_state_restore = peaks_state_restore,
     .peaks_tracked = peaks_tracked,
     .check_state = check_state,
 };

@@ -99,7 +99,9 @@ int fmu_allowed(fmu_instance_t *inst, const char *function, unsigned int states)
         FMU_LOG_ERROR(inst, "%s: illegal call in state %s", function, name);
         return 0;
     }
-    fmu_log(inst, FMU_OK, LOG_ALL, "%s", function);
+    if (inst->log_categories & LOG_ALL) { /* (fmu_log is cold: not called on every call) */
+        fmu_log(inst, FMU_OK, LOG_ALL, "%s", function);
+    }
     return 1;
 }
 
@@ -174,6 +176,29 @@ fmu_status_t fmu_set_debug_logging(fmu_instance_t *inst, const char *function, i
 /* ------------------------------------------------------------------------------------------ */
 /* life cycle */
 
+/* What must be up to date before variable v is read (fmu_get_values). */
+static unsigned char refresh_kind(const csfh_variable_t *v)
+{
+    if (v->causality == CSFH_CAUS_CALCULATED_PARAMETER) {
+        return FMU_REFRESH_PREPARE;
+    }
+    if (v->storage != CSFH_STORE_COMPUTED) {
+        return FMU_REFRESH_NONE;
+    }
+    if (v->offset >= fmu_model.der_offset &&
+        v->offset < fmu_model.der_offset + (size_t)fmu_model.n_states * sizeof(double)) {
+        return FMU_REFRESH_DERIVATIVES;
+    }
+    return FMU_REFRESH_OUTPUTS;
+}
+
+static fmu_vr_get_t vr_get_entry(const csfh_variable_t *v)
+{
+    const fmu_vr_get_t e = {(unsigned int)v->offset, (unsigned char)FMU_ACCEPT(v->type),
+                            refresh_kind(v), v->type == CSFH_TYPE_BOOLEAN};
+    return e;
+}
+
 fmu_instance_t *fmu_instance_new(const char *instance_name, fmu_kind_t type, int fmi_version,
                                  int logging_on)
 {
@@ -190,12 +215,14 @@ fmu_instance_t *fmu_instance_new(const char *instance_name, fmu_kind_t type, int
     }
     inst->n_vr_index = max_vr + 1;
     inst->vr_index = (int *)malloc((size_t)inst->n_vr_index * sizeof(int));
+    inst->vr_get = (fmu_vr_get_t *)calloc(inst->n_vr_index, sizeof(fmu_vr_get_t));
     if (inst->instance_name == NULL || inst->model == NULL || inst->last_step_x == NULL ||
-        inst->vr_index == NULL) {
+        inst->vr_index == NULL || inst->vr_get == NULL) {
         free(inst->instance_name);
         free(inst->model);
         free(inst->last_step_x);
         free(inst->vr_index);
+        free(inst->vr_get);
         free(inst);
         return NULL;
     }
@@ -204,6 +231,11 @@ fmu_instance_t *fmu_instance_new(const char *instance_name, fmu_kind_t type, int
     }
     for (int i = fmu_model.n_variables - 1; i >= 0; i--) { /* the first of equal references */
         inst->vr_index[fmu_model.variables[i].vr] = i;
+    }
+    for (unsigned int r = 0; r < inst->n_vr_index; r++) {
+        if (inst->vr_index[r] >= 0) {
+            inst->vr_get[r] = vr_get_entry(&fmu_model.variables[inst->vr_index[r]]);
+        }
     }
     strcpy(inst->instance_name, instance_name);
     inst->type = type;
@@ -228,6 +260,7 @@ void fmu_instance_free(fmu_instance_t *inst)
     states_free_all(inst); /* FMU states the importer did not free */
     free(inst->last_step_x);
     free(inst->vr_index);
+    free(inst->vr_get);
     free(inst->model);
     free(inst->instance_name);
     free(inst);
@@ -481,20 +514,19 @@ static int *int_of(fmu_instance_t *inst, const csfh_variable_t *v)
     return (int *)((char *)inst->model + v->offset);
 }
 
-/* Bring computed values up to date before they are read. */
-static fmu_status_t refresh(fmu_instance_t *inst, const csfh_variable_t *v, const char *function)
+/* Bring computed values up to date before they are read (what: FMU_REFRESH_*). */
+static fmu_status_t refresh(fmu_instance_t *inst, unsigned char what, const char *function)
 {
-    if (v->causality == CSFH_CAUS_CALCULATED_PARAMETER) {
+    switch (what) {
+    case FMU_REFRESH_PREPARE:
         return fmu_prepare(inst, function);
-    }
-    if (v->storage != CSFH_STORE_COMPUTED) {
+    case FMU_REFRESH_DERIVATIVES:
+        return fmu_update_derivatives(inst, function);
+    case FMU_REFRESH_OUTPUTS:
+        return fmu_update_outputs(inst, function);
+    default:
         return FMU_OK;
     }
-    if (v->offset >= fmu_model.der_offset &&
-        v->offset < fmu_model.der_offset + (size_t)fmu_model.n_states * sizeof(double)) {
-        return fmu_update_derivatives(inst, function);
-    }
-    return fmu_update_outputs(inst, function);
 }
 
 fmu_status_t fmu_get_values(fmu_instance_t *inst, const char *function, const unsigned int vr[],
@@ -507,30 +539,46 @@ fmu_status_t fmu_get_values(fmu_instance_t *inst, const char *function, const un
         return FMU_ERROR;
     }
     fmu_status_t status = FMU_OK;
+    const char *model = (const char *)inst->model;
     for (size_t i = 0; i < nvr; i++) {
-        const csfh_variable_t *v = lookup(inst, function, vr[i], accept);
-        if (v == NULL) {
+        /* the reference's 8-byte entry (fmu_vr_get_t); lookup only for the message */
+        const fmu_vr_get_t *e = vr[i] < inst->n_vr_index ? &inst->vr_get[vr[i]] : NULL;
+        if (e == NULL || (accept & e->accept) == 0) {
+            lookup(inst, function, vr[i], accept);
             return FMU_ERROR;
         }
-        const fmu_status_t s = refresh(inst, v, function);
-        if (s > FMU_WARNING) {
-            return s;
+        /* up-to-date outputs (the common case) are seen here, without a call per value */
+        if (e->refresh != FMU_REFRESH_NONE &&
+            !(e->refresh == FMU_REFRESH_OUTPUTS && inst->outputs_valid)) {
+            const fmu_status_t s = refresh(inst, e->refresh, function);
+            if (s > FMU_WARNING) {
+                return s;
+            }
+            status = s > status ? s : status;
         }
-        status = s > status ? s : status;
+        const char *p = model + e->offset;
         switch (kind) {
         case FMU_VALUE_DOUBLE:
-            ((double *)value)[i] = *real_of(inst, v);
+            memcpy((double *)value + i, p, sizeof(double));
             break;
-        case FMU_VALUE_INT:
-            ((int *)value)[i] = v->type == CSFH_TYPE_BOOLEAN ? (*int_of(inst, v) != 0)
-                                                             : *int_of(inst, v);
+        case FMU_VALUE_INT: {
+            int n;
+            memcpy(&n, p, sizeof(n));
+            ((int *)value)[i] = e->boolean ? (n != 0) : n;
             break;
-        case FMU_VALUE_INT64:
-            ((int64_t *)value)[i] = (int64_t)*int_of(inst, v);
+        }
+        case FMU_VALUE_INT64: {
+            int n;
+            memcpy(&n, p, sizeof(n));
+            ((int64_t *)value)[i] = (int64_t)n;
             break;
-        default:
-            ((bool *)value)[i] = *int_of(inst, v) != 0;
+        }
+        default: {
+            int n;
+            memcpy(&n, p, sizeof(n));
+            ((bool *)value)[i] = n != 0;
             break;
+        }
         }
     }
     return status;

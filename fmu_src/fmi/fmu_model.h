@@ -32,7 +32,7 @@ CSFH_INTERNAL_BEGIN
 #define FMU_CS_ADAMS 2 /* CVODE: Adams-Moulton, fixed-point iteration */
 #define FMU_CS_RK45 3  /* explicit Runge-Kutta 5(4), Dormand-Prince (rk45.c) */
 
-#define FMU_MAX_PEAKS 8 /* peak outputs tracked by the co-simulation stepper */
+#define FMU_MAX_PEAKS 4 /* peak outputs tracked by the co-simulation stepper (csfh: 4) */
 
 typedef struct {
     const char *guid;
@@ -90,10 +90,13 @@ typedef struct {
     void (*peaks_begin)(void *m, int outputs_current);
     int (*peak_values)(void *m, const double *x, double *v);
     void (*peaks_add)(void *m, const double *v);
-    /* Copy into m, from the model struct `from`, the discrete state the peak quantities depend
-     * on (csfh: the contact mode and onset rate), so that a step can be analysed for its peaks
-     * after an event has changed it (NULL: every step is analysed when taken). */
-    void (*peaks_state)(void *m, const void *from);
+    /* The discrete state the peak quantities depend on (csfh: the contact mode and onset rate),
+     * peaks_state_size bytes: saved from m into `state`, and restored into m, so that a step can
+     * be analysed for its peaks after an event has changed it (NULL: every step is analysed
+     * when taken). */
+    size_t peaks_state_size;
+    void (*peaks_state_save)(const void *m, void *state);
+    void (*peaks_state_restore)(void *m, const void *state);
     /* 1 if the peak quantities can be nonzero in the current discrete state (csfh: in the
      * contact mode), 0 if peak_values would return 0 whatever the state (NULL: always 1). */
     int (*peaks_tracked)(const void *m);

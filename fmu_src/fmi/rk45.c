@@ -103,7 +103,7 @@ struct rk45 {
 };
 
 #if defined(__GNUC__)
-__attribute__((format(printf, 2, 3)))
+__attribute__((format(printf, 2, 3), cold))
 #endif
 static void set_message(rk45_t *r, const char *fmt, ...)
 {

@@ -895,6 +895,53 @@ def test_instances_are_independent(make_fmu: MakeFmu, vr: dict[str, int]) -> Non
     assert b.getReal([vr["contact.cr"]]) == [0.8]
 
 
+def test_reads_are_current_after_new_states(
+    make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int]
+) -> None:
+    """fmi2GetReal brings what it reads up to date, per reference (fmu_get_values' table of what
+    each reference needs): after new continuous states the derivatives read as variables equal
+    fmi2GetDerivatives', contact.gap is delta - |r| of the new position (O1 = G1), the state
+    reads are the new states, and one vector read of every variable of a type equals reads one
+    at a time."""
+    fmu, log = initialized(make_fmu, "ME")
+    fmu.newDiscreteStates()
+    fmu.enterContinuousTimeMode()
+    der = [vr[f"der(body1.{n})"] for n in ("x", "y", "theta", "vx", "vy", "omega")]
+    delta = fmu.getReal([vr["contact.delta"]])[0]
+    assert delta > 0.0
+    gaps = []
+    for x in (
+        np.array([0.0, 0.3, 0.01, 0.2, -0.1, 3.0]) * delta,
+        np.array([0.1, -0.5, -0.02, -1.0, 0.4, 0.5]) * delta,
+    ):
+        fmu.setContinuousStates(x.ctypes.data_as(POINTER(c_double)), 6)
+        values = fmu.getReal(
+            [
+                *der,
+                vr["contact.gap"],
+                *[vr[f"body1.{n}"] for n in ("x", "y", "theta", "vx", "vy", "omega")],
+            ]
+        )
+        dx = np.zeros(6)
+        fmu.getDerivatives(dx.ctypes.data_as(POINTER(c_double)), 6)
+        assert values[:6] == list(dx)
+        assert values[6] == pytest.approx(
+            delta - math.hypot(x[0], x[1]), rel=1e-14, abs=1e-15 * delta
+        )
+        assert values[7:] == list(x)
+        gaps.append(values[6])
+        for kind, getter in (
+            ("Real", fmu.getReal),
+            ("Integer", fmu.getInteger),
+            ("Boolean", fmu.getBoolean),
+        ):
+            refs = [v.valueReference for v in model_description.modelVariables if v.type == kind]
+            assert len(refs) > 3, kind
+            assert list(getter(refs)) == [getter([r])[0] for r in refs], kind
+    assert gaps[0] != gaps[1]
+    assert not log.errors()
+
+
 # ------------------------------------------------------------------------------------------
 # non-finite values of the model
 
