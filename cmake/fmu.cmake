@@ -122,7 +122,8 @@ endfunction()
 
 # build/<name>.fmu: modelDescription.xml with <SourceFiles>, binaries/ of every platform built
 # (cmake/platforms.cmake), sources/ (the FMU's own sources and headers, the SUNDIALS modules it
-# uses and our SUNDIALS configuration: an importer compiles sources/*.c with `-I sources`),
+# uses and our SUNDIALS configuration: an importer compiles sources/*.c with `-I sources`, and
+# whatever its flags the binary exports only the fmi2* functions: csfh_visibility.h),
 # documentation/ (index.html from the variables file, SUNDIALS' licence).
 #   csfh_add_fmu_package(name MODEL_IDENTIFIER id VARIABLES toml SOURCES .c... HEADERS .h...
 #                        SUNDIALS_MODULES m... HOST_TARGET target)
@@ -146,6 +147,12 @@ function(csfh_add_fmu_package name)
   set(source_names)
   foreach(f IN LISTS own sundials_c sundials_private)
     get_filename_component(n ${f} NAME)
+    if(f IN_LIST sundials_private AND EXISTS ${CSFH_SUNDIALS_CONFIG_DIR}/hidden/${n})
+      # SUNDIALS' private header that declares internal functions without an export macro: ours
+      # (fmu_src/sundials_config/hidden/) takes its place and includes it with them hidden
+      list(APPEND files "sources/sundials_private/${n}=${f}")
+      set(f ${CSFH_SUNDIALS_CONFIG_DIR}/hidden/${n})
+    endif()
     list(APPEND files "sources/${n}=${f}")
     if(n MATCHES "\\.c$")
       list(APPEND source_names ${n})

@@ -614,6 +614,9 @@ def c_header(spec: dict, guid: str, source: str = "variables.toml") -> str:
     w(f"#define {P}_VARIABLES_H")
     w("")
     w('#include "csfh_vartable.h"')
+    w('#include "csfh_visibility.h"')
+    w("")
+    w("CSFH_INTERNAL_BEGIN")
     w("")
     w(f'#define {P}_GUID "{guid}"')
     w(f'#define {P}_MODEL_IDENTIFIER "{spec["model"]["modelIdentifier"]}"')
@@ -626,6 +629,8 @@ def c_header(spec: dict, guid: str, source: str = "variables.toml") -> str:
         w(f"#define {P}_VR_{c_ident(v['name'])} {v['vr']}u")
     w("")
     w(f"extern const csfh_variable_t {prefix}_variables[{P}_NUMBER_OF_VARIABLES];")
+    w("")
+    w("CSFH_INTERNAL_END")
     w("")
     w("#endif")
     return "\n".join(out) + "\n"

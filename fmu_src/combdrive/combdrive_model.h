@@ -30,6 +30,9 @@
 #include <stddef.h>
 
 #include "csfh_vartable.h"
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
 
 typedef struct {
     int fingers;          /* n */
@@ -73,5 +76,7 @@ double combdrive_ramp(double V0, double V1, double t0, double t1, double t);
 /* F, F_x, F_y, M at the current inputs and time (drive voltage V + ramp(time)). 0, or -1 with
  * a message if a value is not finite. */
 int combdrive_outputs(combdrive_model_t *m, char *msg, size_t msg_size);
+
+CSFH_INTERNAL_END
 
 #endif

@@ -8,6 +8,9 @@
 
 #include "csfh_moreau.h"
 #include "csfh_rk4event.h"
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
 
 #if defined(__GNUC__)
 #define CSFH_API __attribute__((visibility("default")))
@@ -81,5 +84,7 @@ CSFH_API int csfh_api_rk4_run(csfh_model_t *m, double h0, double tol, double h_m
                               double x_end[6], long long stats[5]);
 CSFH_API int csfh_api_rk4_record_columns(void);
 CSFH_API int csfh_api_contact_record_columns(void);
+
+CSFH_INTERNAL_END
 
 #endif

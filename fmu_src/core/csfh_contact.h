@@ -3,6 +3,10 @@
 #ifndef CSFH_CONTACT_H
 #define CSFH_CONTACT_H
 
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
+
 typedef struct {
     double gap;     /* g = delta - |e|, m (contact when <= 0) */
     double e_norm;  /* |e|, m */
@@ -23,5 +27,7 @@ void csfh_contact_kinematics(double delta, double R1, const double s1bar[2], con
 
 /* Generalized contact force Q_c = D^T [F_N, F_T] (docs/model.md §3), added to Q. */
 void csfh_contact_add_force(const csfh_contact_kin_t *kin, double F_N, double F_T, double Q[3]);
+
+CSFH_INTERNAL_END
 
 #endif

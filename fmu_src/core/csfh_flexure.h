@@ -3,6 +3,10 @@
 #ifndef CSFH_FLEXURE_H
 #define CSFH_FLEXURE_H
 
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
+
 /* Beam of the flexure: a circular arc clamped at the root C2, loaded at the tip C1. */
 typedef struct {
     double rho;       /* m    radius of the centreline */
@@ -71,5 +75,7 @@ void csfh_arc_section_setup(const csfh_arc_beam_t *beam, double phi_root, csfh_a
  * sigma_max [Pa] and, in *location (may be NULL), the arc angle of that section measured from
  * the root C2 [rad, 0 .. beta] (ties: the section nearest the root). */
 double csfh_arc_stress_max(const csfh_arc_section_t *sec, const double w[3], double *location);
+
+CSFH_INTERNAL_END
 
 #endif

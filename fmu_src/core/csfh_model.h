@@ -13,6 +13,9 @@
 #include "csfh_flexure.h"
 #include "csfh_normal_law.h"
 #include "csfh_vartable.h"
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
 
 /* User parameters, one field per FMI parameter (names in modelDescription/variables.toml). */
 typedef struct {
@@ -230,5 +233,7 @@ void csfh_model_stresses(const csfh_model_t *m, const double q[3], double F_N,
 
 /* Fill m->out (forces, gap, energies, stresses, peaks, margins) at the current state. */
 int csfh_model_outputs(csfh_model_t *m);
+
+CSFH_INTERNAL_END
 
 #endif

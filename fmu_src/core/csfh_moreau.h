@@ -9,6 +9,9 @@
 #include <stddef.h>
 
 #include "csfh_model.h"
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
 
 typedef enum {
     CSFH_STICK_PAPER = 1,  /* f_a decides whether an arriving contact sticks (paper-literal) */
@@ -96,5 +99,7 @@ int csfh_moreau_run(csfh_model_t *m, const csfh_moreau_options_t *o, double t0, 
                     long long n_steps, long long record_every, double *records, size_t max_records,
                     double *impacts, size_t max_impacts, double x_end[6],
                     csfh_moreau_stats_t *stats);
+
+CSFH_INTERNAL_END
 
 #endif

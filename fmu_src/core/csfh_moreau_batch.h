@@ -10,6 +10,9 @@
 
 #include "csfh_api.h"
 #include "csfh_moreau.h"
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
 
 /* Number of statistics per variant written by csfh_api_moreau_batch (the order of
  * csfh_moreau_stats_t: steps, active, stick, slip, fallback, onsets, records, impacts,
@@ -32,5 +35,7 @@ CSFH_API long long csfh_api_moreau_batch(csfh_model_t *const *models, size_t n, 
                                          double *records, size_t max_records, double *impacts,
                                          size_t max_impacts, double *x_end, long long *stats,
                                          int *status);
+
+CSFH_INTERNAL_END
 
 #endif

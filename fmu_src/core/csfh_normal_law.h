@@ -4,6 +4,9 @@
 #define CSFH_NORMAL_LAW_H
 
 #include "csfh_enums.h"
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
 
 /* ESDU-78035 journal-bearing law rho(F) = a F [ln(F_max/F) + 1] (Eq. 18 rewritten):
  * a = (sigma1 + sigma2)/L, F_max = F* = 4 L dR/(sigma1 + sigma2) (docs/model.md §4.5). */
@@ -74,5 +77,7 @@ int csfh_normal_force(const csfh_normal_law_t *law, double rho, double rho_dot,
 
 /* Elastic energy: integral of F_el from 0 to rho (closed form except LN_ESDU I3: quadrature). */
 double csfh_normal_elastic_energy(const csfh_normal_law_t *law, double rho);
+
+CSFH_INTERNAL_END
 
 #endif

@@ -10,6 +10,9 @@
 #include <stddef.h>
 
 #include "csfh_model.h"
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
 
 typedef struct {
     double h0;    /* nominal step, s (paper: 2e-4) */
@@ -46,5 +49,7 @@ int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
                        const double x0[6], double t_end, double dt_out, double *records,
                        size_t max_records, double *contacts, size_t max_contacts, double x_end[6],
                        csfh_rk4_stats_t *stats);
+
+CSFH_INTERNAL_END
 
 #endif

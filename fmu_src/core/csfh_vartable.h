@@ -6,6 +6,10 @@
 
 #include <stddef.h>
 
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
+
 typedef enum {
     CSFH_TYPE_REAL,
     CSFH_TYPE_INTEGER,
@@ -50,5 +54,7 @@ int csfh_check_value(const csfh_variable_t *v, double value, char *msg, size_t m
 
 /* Shortest "%g" text that reads back as the same double (0.3, not 0.29999999999999999). */
 const char *csfh_format_value(char buf[32], double value);
+
+CSFH_INTERNAL_END
 
 #endif

@@ -4,7 +4,10 @@
 #ifndef CSFH_COSIMULATION_H
 #define CSFH_COSIMULATION_H
 
+#include "csfh_visibility.h"
 #include "fmu_instance.h"
+
+CSFH_INTERNAL_BEGIN
 
 /* The hooks the front-end gives every instance it makes (fmu_instance_t.stepper). */
 extern const fmu_stepper_t cs_stepper;
@@ -21,5 +24,7 @@ fmu_status_t cs_reset(fmu_instance_t *inst);
  * analyses RK45's steps for them only when needed): before the outputs are computed, an FMU
  * state is taken or values are set. Nothing without co-simulation. */
 void cs_peaks_flush(fmu_instance_t *inst);
+
+CSFH_INTERNAL_END
 
 #endif

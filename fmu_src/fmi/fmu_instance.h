@@ -16,7 +16,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "csfh_visibility.h"
 #include "fmu_model.h"
+
+CSFH_INTERNAL_BEGIN
 
 /* Status of a call: the numbering of fmi2Status and fmi3Status (OK .. Fatal). */
 typedef enum {
@@ -279,5 +282,7 @@ static inline double *fmu_derivatives(fmu_instance_t *inst)
 {
     return (double *)((char *)inst->model + fmu_model.der_offset);
 }
+
+CSFH_INTERNAL_END
 
 #endif

@@ -17,6 +17,9 @@
 #include <stddef.h>
 
 #include "csfh_vartable.h"
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
 
 /* Return values of derivatives() and outputs(). */
 #define FMU_MODEL_OK 0
@@ -108,5 +111,7 @@ typedef struct {
 
 /* Defined by the model adapter linked into the FMU binary. */
 extern const fmu_model_t fmu_model;
+
+CSFH_INTERNAL_END
 
 #endif

@@ -17,6 +17,10 @@
 #ifndef CSFH_RK45_H
 #define CSFH_RK45_H
 
+#include "csfh_visibility.h"
+
+CSFH_INTERNAL_BEGIN
+
 /* ydot = f(t, y): 0 on success, > 0 recoverable (the step is retried 4x smaller), < 0 fatal. */
 typedef int (*rk45_rhs_fn)(double t, const double *y, double *ydot, void *user);
 /* g(t, y), n_roots values: 0 on success, nonzero fails the step. */
@@ -93,5 +97,7 @@ double rk45_next_step(const rk45_t *r);    /* h the step-size control proposes n
 void rk45_get_stats(const rk45_t *r, rk45_stats_t *s);
 const char *rk45_message(const rk45_t *r); /* what the last failure was, with its values */
 const char *rk45_flag_name(int flag);
+
+CSFH_INTERNAL_END
 
 #endif

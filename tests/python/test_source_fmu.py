@@ -2,11 +2,16 @@
 sources/ holds them with the SUNDIALS modules they need and our fixed SUNDIALS configuration
 header, and fmpy's build_platform_binary (an importer's generic CMake build: every listed file,
 `-I sources`, nothing else) builds from them, with the binaries removed, a binary whose
-co-simulation and model-exchange runs reproduce the shipped binary's."""
+co-simulation and model-exchange runs reproduce the shipped binary's and which, like it, exports
+only the fmi2* functions."""
 
 from __future__ import annotations
 
+import os
+import re
 import shutil
+import subprocess
+import sys
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -120,3 +125,32 @@ def test_binary_built_from_the_sources_reproduces_the_shipped_one(
         np.testing.assert_allclose(b[field], a[field], rtol=0, atol=1e-9 * scale, err_msg=field)
     if name == "csfh":
         assert np.max(a["contact.F_N"]) > 0  # the runs go through contacts
+
+
+def fmi2_functions() -> set[str]:
+    """Every function FMI 2.0 defines (fmi2Functions.h of the installed fmpy)."""
+    header = Path(fmpy.__file__).parent / "c-code" / "fmi2Functions.h"
+    return set(re.findall(r"^#define\s+(fmi2\w+)\s+fmi2FullName\(", header.read_text(), re.M))
+
+
+def test_binary_built_from_the_sources_exports_only_the_fmi2_functions(
+    built: tuple[str, Path, Path],
+) -> None:
+    """The importer compiles sources/ with its own flags (no -fvisibility=hidden, no version
+    script): the binary must still export only the FMI functions, as the shipped one does, or an
+    internal function (cs_free, fmu_log, SUNDIALS' cvEwtSet, ...) of the FMU could be interposed
+    by a same-named symbol of another library in the importer's process."""
+    nm = shutil.which("nm")
+    if not sys.platform.startswith("linux") or nm is None:
+        pytest.skip("the exported symbols are read with GNU nm on Linux")
+    name, _, rebuilt = built
+    binary = rebuilt / "binaries" / fmpy.platform / f"{name}{fmpy.sharedLibraryExtension}"
+    assert os.path.isfile(binary), list((rebuilt / "binaries").rglob("*"))
+    out = subprocess.run(
+        [nm, "-D", "--defined-only", str(binary)], check=True, capture_output=True, text=True
+    ).stdout
+    symbols = {line.split()[-1] for line in out.splitlines() if line.strip()}
+    expected = fmi2_functions()
+    assert len(expected) == 44  # the FMI 2.0 standard's functions, both interfaces
+    assert sorted(symbols - expected) == []
+    assert symbols == expected

@@ -7,7 +7,7 @@
  *   - serial only: no MPI, no threads, no GPU, no third-party libraries;
  *   - no logging, no profiling, no monitoring, no fused kernels;
  *   - compiled into the FMU binary (static): no symbol of SUNDIALS is exported (see
- *     sundials_export.h).
+ *     sundials_export.h for its API, ../hidden/ for the internal functions of CVODE).
  *
  * Only the macros the compiled modules (cmake/sundials.cmake) read are defined. */
 #ifndef CSFH_SUNDIALS_CONFIG_H
