@@ -21,7 +21,7 @@ from fmpy.fmi2 import (
 )
 from fmpy.model_description import ModelDescription
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _find_fmu() -> Path:
