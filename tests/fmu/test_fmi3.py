@@ -198,11 +198,6 @@ def test_fmi3_binaries_of_the_other_platforms_export_exactly_the_fmi3_functions(
     assert versions and max(versions) <= (2, 17), sorted(versions)
 
 
-def test_fmu_path_refuses_unknown_fmi_version() -> None:
-    with pytest.raises(ValueError, match="fmi_version = 4"):
-        csfh.fmu_path(fmi_version=4)
-
-
 # ------------------------------------------------------------------------------------------
 # the same model: FMI 3.0 reproduces FMI 2.0
 

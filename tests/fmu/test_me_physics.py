@@ -1,6 +1,7 @@
 """Model exchange through fmpy with CVode against the analytic oracles of docs/model.md §7 and
-against the laws of sections 2 and 4 computed independently in the test (tests/python/oracles.py:
-quadrature, scipy's integrators, the explicit direction of the ESDU law)."""
+against the laws of sections 2 and 4 computed independently in the test (tests/oracles.py:
+quadrature, scipy's integrators, the explicit direction of the ESDU law); and the event flags a
+model-exchange importer sees at the contact-mode switches."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ import fmpy
 import numpy as np
 import oracles
 import pytest
+from fmi2_calls import MakeFmu
 
 from csfh.model.scene import load_scene
 from csfh.runners.fmu import simulate_me
@@ -445,3 +447,58 @@ def test_contact_force_acts_in_the_contact_mode_only(make_fmu, vr: dict[str, int
     expected = oracles.k_spheres() * penetration**1.5 * (1 + oracles.xi("LN", 0.9))
     assert F_N == pytest.approx(expected, rel=1e-12)
     assert dx[4] == pytest.approx(F_N / M1 - G, rel=1e-12)
+
+
+# ------------------------------------------------------------------------------------------
+# what a model-exchange importer sees at the contact-mode switches
+
+
+def _me_in_flight(make_fmu: MakeFmu, vr: dict[str, int]):
+    """A model-exchange instance of the central drop, out of contact, in continuous-time mode."""
+    fmu, log = make_fmu("ME")
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setBoolean([vr["flexure.enabled"], vr["friction.enabled"]], [False, False])
+    fmu.setReal([vr["body1.x"], vr["body1.y"]], [0.0, 0.0])
+    fmu.exitInitializationMode()
+    info = fmu.newDiscreteStates()
+    assert info[3] is False  # valuesOfContinuousStatesChanged: nothing switched at the start
+    fmu.enterContinuousTimeMode()
+    return fmu, log
+
+
+def _indicator(fmu) -> float:
+    z = (c_double * 1)()
+    fmu.getEventIndicators(z, 1)
+    return z[0]
+
+
+def test_every_contact_mode_switch_asks_the_importer_to_restart(
+    make_fmu: MakeFmu, vr: dict[str, int]
+) -> None:
+    """FMI 2.0 importers restart their integrator after an event when fmi2NewDiscreteStates
+    reports valuesOfContinuousStatesChanged (or nominalsOfContinuousStatesChanged): the FMU sets
+    it at the onset and at the release (the right-hand side switches there), returns the states
+    unchanged, and a repeated call in the same event reports nothing (no event loop); the event
+    indicator keeps its sign across the switch, so re-reading it starts no new event."""
+    fmu, _ = _me_in_flight(make_fmu, vr)
+    delta = 0.02
+    for y, v, active in ((-delta - 1e-9, -0.5, True), (-delta + 1e-6, 0.5, False)):
+        x = [0.0, y, 0.0, 0.0, v, 0.0]
+        fmu.setTime(0.1)
+        fmu.setContinuousStates((c_double * 6)(*x), 6)
+        z_before = _indicator(fmu)
+        fmu.enterEventMode()
+        more, terminate, nominals, values, *_ = fmu.newDiscreteStates()
+        assert (more, terminate, nominals, values) == (False, False, False, True)
+        assert fmu.getBoolean([vr["contact.active"]])[0] == active
+        states = (c_double * 6)()
+        fmu.getContinuousStates(states, 6)
+        assert list(states) == x
+        z_after = _indicator(fmu)
+        assert math.copysign(1, z_after) == math.copysign(1, z_before)
+        assert fmu.newDiscreteStates()[3] is False  # nothing switches twice
+        fmu.enterContinuousTimeMode()
+    # an event that switches nothing (the importer's indicator noise) asks for no restart
+    fmu.enterEventMode()
+    assert fmu.newDiscreteStates()[3] is False

@@ -52,9 +52,7 @@ def built(
     if shutil.which("cmake") is None:
         pytest.fail("cmake is needed to build the source FMU")
     name = request.param
-    shipped = Path(
-        fmpy.extract(str(fmu_file(fmu_path, name)), str(tmp_path_factory.mktemp(name)))
-    )
+    shipped = Path(fmpy.extract(str(fmu_file(fmu_path, name)), str(tmp_path_factory.mktemp(name))))
     rebuilt = Path(
         fmpy.extract(str(fmu_file(fmu_path, name)), str(tmp_path_factory.mktemp(name + "_src")))
     )

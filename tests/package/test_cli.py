@@ -1,10 +1,9 @@
 """The command line itself: fast to start, every command described with its defaults, a version,
-the stress cases listed, and a progress bar that leaves the terminal clean."""
+the stress cases listed, one entry point, and a user's scene file run."""
 
 from __future__ import annotations
 
 import argparse
-import io
 import os
 import re
 import subprocess
@@ -12,11 +11,11 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import csfh
 from csfh.cli.main import build_parser, main
-from csfh.progress import Progress
 
 ROOT = Path(__file__).resolve().parents[2]
 HEAVY = ("numpy", "scipy", "matplotlib", "fmpy", "tqdm", "distributed", "libcosimpy")
@@ -116,52 +115,6 @@ def test_bad_option_values_are_refused_by_the_parser(capsys: pytest.CaptureFixtu
     assert "--repeats: '0' must be >= 1" in capsys.readouterr().err
 
 
-class Terminal(io.StringIO):
-    """A stream that says it is a terminal; `screen` is what a terminal would show."""
-
-    def isatty(self) -> bool:
-        return True
-
-    def screen(self) -> list[str]:
-        lines = [""]
-        col = 0
-        for ch in self.getvalue():
-            if ch == "\r":
-                col = 0
-            elif ch == "\n":
-                lines.append("")
-                col = 0
-            else:
-                line = lines[-1]
-                lines[-1] = line[:col].ljust(col) + ch + line[col + 1 :]
-                col += 1
-        return [line.rstrip() for line in lines]
-
-
-@pytest.mark.parametrize("total", [None, 40])
-def test_progress_shows_on_a_terminal_and_leaves_it_clean(total: int | None) -> None:
-    term = Terminal()
-    progress = Progress("central: LN_spheres", stream=term, delay=0.0, total=total)
-    for k in range(41):
-        progress.update(k if total else k / 40)
-    assert "central: LN_spheres" in term.screen()[-1]
-    progress.close()
-    assert "\x1b" not in term.getvalue()  # plain carriage returns only
-    assert term.screen() == [""], term.screen()
-
-
-def test_progress_is_silent_when_quiet_or_not_a_terminal() -> None:
-    quiet = Terminal()
-    progress = Progress("x", quiet=True, stream=quiet, delay=0.0)
-    progress.update(0.5)
-    progress.close()
-    piped = io.StringIO()
-    progress = Progress("x", stream=piped, delay=0.0)
-    progress.update(0.5)
-    progress.close()
-    assert quiet.getvalue() == "" and piped.getvalue() == ""
-
-
 def test_module_and_console_script_are_the_same_entry_point() -> None:
     """`python -m csfh` and the `csfh` script (pyproject.toml) run csfh.cli.main:main."""
     import tomllib
@@ -172,15 +125,28 @@ def test_module_and_console_script_are_the_same_entry_point() -> None:
     assert os.path.isfile(ROOT / "python/csfh/py.typed")
 
 
-def test_every_public_name_is_there_and_imported_on_first_use() -> None:
-    """csfh's public names (csfh.__all__) resolve, and importing csfh loads none of them."""
-    code = (
-        "import sys, csfh\n"
-        "loaded = sorted(m for m in sys.modules if m.startswith('csfh.'))\n"
-        "names = [getattr(csfh, n) for n in csfh.__all__]\n"
-        "print(loaded, len(names))"
+def test_user_scene_file_runs(tmp_path: Path) -> None:
+    path = tmp_path / "mine.toml"
+    path.write_text(
+        'name = "mine"\nstop_time = 0.1\n[initial]\nq = [0.005, 0.0, 0.0]\n'
+        '[parts]\nflexure = false\n[parameters]\n"contact.cr" = 0.5\n'
     )
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "csfh",
+            "run",
+            str(path),
+            "--law",
+            "Flores",
+            "--out",
+            str(tmp_path / "out"),
+            "--quiet",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.strip() == f"['csfh._version'] {len(csfh.__all__)}"
-    assert sorted(set(csfh.__all__) - {"__version__"}) == sorted(csfh._PUBLIC)
+    data = np.genfromtxt(tmp_path / "out" / "Flores.csv", delimiter=",", names=True)
+    assert data["t_s"][-1] == pytest.approx(0.1)

@@ -316,3 +316,20 @@ def test_ctrl_c_while_starting_up_is_one_line(
     # 130, or killed by SIGINT after the clean-up (CPython does that when an exec'd string saw
     # the KeyboardInterrupt; a shell shows 130 for both)
     assert rc in (130, -signal.SIGINT), (rc, err)
+
+
+def test_cli_unknown_scene_and_law(tmp_path: Path) -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "csfh", "run", "nowhere", "--law", "Moreau"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert proc.returncode == 2 and "unknown scene 'nowhere'" in proc.stderr
+    proc = subprocess.run(
+        [sys.executable, "-m", "csfh", "run", "central", "--law", "Bogus"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert proc.returncode == 2 and "Bogus" in proc.stderr

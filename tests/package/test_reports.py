@@ -1,20 +1,18 @@
-"""What the harness writes and reads back: the CSV tables and their reader, the comparison's
-figures (what they draw, how they name the models), and `csfh plot` re-plotting a saved run."""
+"""What the harness writes and reads back: the CSV tables and their reader, and the comparison's
+figures (what they draw, how they name the models). (`csfh plot` re-plotting a saved run:
+test_compare.py.)"""
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from csfh.cli.main import main
 from csfh.model import model_info
 from csfh.output import read_table, write_table
 from csfh.studies import paper_figures
-from csfh.studies.compare import compare, read_comparison
 from csfh.trajectory import COLUMNS, UNITS, Trajectory
 
 
@@ -107,42 +105,3 @@ def test_every_figure_names_the_models_as_the_command_line_does() -> None:
         if line.get_label() in model_info.MODELS
     }
     assert len(set(colors.values())) == len(model_info.MODELS)  # one colour per model
-
-
-def test_plot_redraws_a_saved_comparison(tmp_path: Path) -> None:
-    """`csfh plot DIR` draws the figures of `csfh compare` again from its files alone."""
-    out = tmp_path / "run"
-    result = compare("central", out, models=("LN_cylinders", "Moreau"))
-    figures = {p.name: p for p in result.files if p.suffix == ".png"}
-    assert sorted(figures) == sorted(paper_figures.FIGURES)
-    for path in figures.values():
-        path.unlink()
-    summary, runs = read_comparison(out)
-    assert summary["clearance"] == pytest.approx(0.02, rel=1e-12)  # R2 - R1 of the central scene
-    for original, back in zip(result.runs, runs, strict=True):
-        assert back.model == original.model
-        np.testing.assert_allclose(back["y"], original["y"], rtol=1e-9, atol=1e-15)
-        np.testing.assert_allclose(back.contacts, original.contacts, rtol=1e-15)
-        assert bool(back.steps) == bool(original.steps)
-        if original.steps:
-            np.testing.assert_allclose(back.steps["F_N"], original.steps["F_N"], rtol=1e-9)
-    assert main(["plot", str(out)]) == 0
-    for name in paper_figures.FIGURES:
-        assert (out / name).stat().st_size > 10_000, name
-
-
-def test_plot_of_a_directory_without_a_comparison_is_one_line(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    assert main(["plot", str(tmp_path)]) == 2
-    err = capsys.readouterr().err.strip()
-    assert err.startswith("csfh: error: ") and "summary.json" in err and "\n" not in err
-    (tmp_path / "summary.json").write_text(json.dumps({"scene": "x", "models": {"Spring": {}}}))
-    assert main(["plot", str(tmp_path)]) == 2
-    assert "not a summary written by csfh compare" in capsys.readouterr().err
-    (tmp_path / "summary.json").write_text(
-        json.dumps({"scene": "x", "clearance": 0.02, "models": {"Spring": {}}})
-    )
-    assert main(["plot", str(tmp_path)]) == 2
-    err = capsys.readouterr().err
-    assert "Spring.csv: missing" in err
