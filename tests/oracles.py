@@ -12,6 +12,8 @@ the package or the FMU; the tests compare the FMU and the harness with these num
 * Contact stiffnesses (4.2)-(4.4), the damping factors (4.6), the ESDU law (4.7) in its explicit
   direction rho(F), its tangent stiffness (4.8) and F*.
 * The central impact with gravity of each compliant law (4.1), integrated by scipy.
+* The central scene's free fall to the first contact (7.1) and its rigid bounce sequence (7.4).
+* The comb drive's force constant n eps0 t / g of the combdrive scene (F = k V^2).
 """
 
 from __future__ import annotations
@@ -24,6 +26,24 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 G = 9.81  # m/s^2, along -Y (docs/model.md §0)
+# docs/model.md §7.1: the central scene's free fall of 0.03 m, from q0 = [0, 0.01, 0] to the bore
+T_FIRST_CENTRAL = math.sqrt(2 * 0.03 / G)
+V_FIRST_CENTRAL = math.sqrt(2 * G * 0.03)
+
+
+EPS0 = 8.8541878128e-12  # F/m, the vacuum permittivity
+K_COMB = 20000 * EPS0 * 0.025 / 5e-6  # N/V^2: n eps0 t / g of the combdrive scene's actuator
+
+
+def rigid_impact_times(n: int, cr: float = 0.9) -> np.ndarray:
+    """docs/model.md §7.4: the first n impact times of the central scene's rigid bounce sequence
+    (restitution cr)."""
+    t = [T_FIRST_CENTRAL]
+    v = V_FIRST_CENTRAL
+    for _ in range(n - 1):
+        v *= cr
+        t.append(t[-1] + 2 * v / G)
+    return np.array(t)
 
 
 @dataclass(frozen=True)

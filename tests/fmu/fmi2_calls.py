@@ -23,8 +23,9 @@ FMU = FMU2Model | FMU2Slave
 
 OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3  # fmi2Status
 STATES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
+STATE_SCALES = (0.01, 0.01, 0.1, 0.1, 0.1, 1.0)  # m, m, rad, m/s, m/s, rad/s
 METHODS = {"auto": 1, "BDF": 2, "Adams": 3, "RK45": 4}  # enumeration SolverMethod
-TIGHT = 1e-10  # a relative tolerance both integrators meet far below the checked differences
+TIGHT = 1e-10  # the relative tolerance of the accurate runs (the FMU's integrator, fmpy's CVode)
 
 
 # ------------------------------------------------------------------------------------------

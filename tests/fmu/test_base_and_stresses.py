@@ -23,36 +23,12 @@ from typing import Any
 
 import numpy as np
 import pytest
+from fmi2_calls import STATES, TIGHT, MakeFmu, scene_start_values, set_values
 from fmpy import simulate_fmu
 from fmpy.model_description import ModelDescription
 from scipy.optimize import minimize
 
-from csfh import Scene, load_scene, moreau, scene_from_dict, simulate
-
-MakeFmu = Callable[..., tuple[Any, Any]]
-
-STATES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
-TIGHT = 1e-10
-
-
-def start_values(scene: Scene, law: str, extra: dict[str, Any] | None = None) -> dict[str, Any]:
-    values: dict[str, Any] = dict(scene.parameter_values(law))
-    values.update(dict(zip(STATES, scene.x0, strict=True)))
-    values.update(scene.inputs)
-    values.update(extra or {})
-    return values
-
-
-def set_values(fmu: Any, md: ModelDescription, values: dict[str, Any]) -> None:
-    types = {v.name: (v.valueReference, v.type) for v in md.modelVariables}
-    for name, value in values.items():
-        ref, kind = types[name]
-        if kind == "Real":
-            fmu.setReal([ref], [float(value)])
-        elif kind == "Boolean":
-            fmu.setBoolean([ref], [bool(value)])
-        else:
-            fmu.setInteger([ref], [int(value)])
+from csfh import load_scene, moreau, scene_from_dict, simulate
 
 
 def run_cs(
@@ -113,7 +89,7 @@ def test_a_base_zero_is_bitwise_unchanged_and_a_base_is_the_force_minus_m1_a(
     scene = load_scene("csfh")
     m1 = defaults(md)["body1.m"]
     outputs = [*STATES, "contact.F_N", "contact.F_N_peak", "flexure.stress_max"]
-    base = start_values(scene, "LN_spheres")
+    base = scene_start_values(scene, "LN_spheres")
     plain = run_cs(make_fmu, md, base, 0.3, 1e-3, outputs, tolerance=1e-6)
     zeros = run_cs(
         make_fmu,
@@ -158,7 +134,7 @@ def test_energy_balance_under_base_acceleration(
     md = model_description
     scene = load_scene("csfh")
     m1 = defaults(md)["body1.m"]
-    values = start_values(
+    values = scene_start_values(
         scene,
         "LN_spheres",
         {
@@ -251,7 +227,7 @@ def test_slow_ramp_of_a_base_reaches_the_static_equilibrium(
     a_end, T = np.array([4.0, -3.0]), 40.0
     q_start, q_eq = equilibrium(np.zeros(2)), equilibrium(a_end)
     assert abs(q_eq[2]) > 0.01 and np.hypot(*q_eq[:2]) > 0.01  # a large, nonlinear deflection
-    values = start_values(
+    values = scene_start_values(
         scene,
         "LN_spheres",
         {
@@ -296,7 +272,7 @@ def test_pressure_max_is_the_hertz_formula_at_every_contact_sample(
 ) -> None:
     md = model_description
     scene = load_scene("csfh")
-    values = start_values(scene, "LN_spheres")
+    values = scene_start_values(scene, "LN_spheres")
     names = [
         "contact.F_N",
         "contact.F_N_peak",
@@ -408,7 +384,7 @@ def test_tracked_stress_peak_against_a_fine_grid(
     md = model_description
     scene = load_scene("csfh")
     names = ["flexure.stress_max", "flexure.stress_max_peak", "flexure.stress_margin"]
-    values = start_values(scene, "LN_spheres", {"flexure.track_stress_peak": True})
+    values = scene_start_values(scene, "LN_spheres", {"flexure.track_stress_peak": True})
     coarse = run_cs(make_fmu, md, values, 0.5, 1e-2, names, tolerance=1e-9)
     fine = run_cs(make_fmu, md, values, 0.5, 1e-5, names[:1], tolerance=1e-9)
     allowable = defaults(md)["flexure.stress_allowable"]
@@ -473,7 +449,7 @@ def test_scale_consistency(
     scene = replace(load_scene("csfh"), preset=preset)
     exps = scale_exponents(md)
     start = defaults(md)
-    values = start_values(scene, law)
+    values = scene_start_values(scene, law)
     for name in exps:  # every Real quantity explicitly, so that its default is scaled too
         values.setdefault(name, start[name])
     names = ["body1.x", "body1.y", "body1.theta", "flexure.stress_max", "contact.count"]
@@ -524,7 +500,7 @@ def test_mems_scene_runs(fmu_path: Any) -> None:
             "flexure.stress_margin",
             "contact.pressure_margin",
         ],
-        start_values={**start_values(scene, "LN_spheres"), "flexure.track_stress_peak": True},
+        start_values={**scene_start_values(scene, "LN_spheres"), "flexure.track_stress_peak": True},
         relative_tolerance=scene.integrator.rtol,
     )
     assert 1e7 < np.max(r["flexure.stress_max_peak"]) < p["flexure.stress_allowable"]

@@ -37,13 +37,12 @@ from fmi2_calls import (
 )
 from fmpy.fmi1 import FMICallException
 from fmpy.model_description import ModelDescription
+from fmu_binaries import run_cs_master
+from oracles import T_FIRST_CENTRAL, V_FIRST_CENTRAL, G
 
 from csfh.model.scene import Scene, load_scene
 from csfh.runners.fmu import simulate_cs, simulate_me
 
-G = 9.81
-T_FIRST_CENTRAL = math.sqrt(2 * 0.03 / G)  # docs/model.md §7.1
-V_FIRST_CENTRAL = math.sqrt(2 * G * 0.03)
 RHO_MAX_CENTRAL = 1.19279e-4  # docs/model.md §7.2, K_spheres, m: the indentation scale
 R1 = 0.18  # m, contact.R1 of the paper's scenes (Table 2)
 
@@ -259,14 +258,11 @@ def test_communication_grid_costs_no_integration_steps(
 
 
 def test_a_compiled_master_runs_the_fmu(
-    fmu_path: Path, model_description: ModelDescription, vr: dict[str, int]
+    fmu_path: Path, model_description: ModelDescription
 ) -> None:
     """benchmarks/master/bench_cs_master.c, a plain C importer (dlopen, fmi2Instantiate, start
     values, fmi2DoStep loop; no fmpy), runs the FMU binary to the same state and contact count
     as csfh.simulate_cs (the trajectory does not depend on the communication grid)."""
-    import json
-    import subprocess
-
     root = Path(__file__).resolve().parents[2]
     master = root / "build" / "bench_cs_master"
     if not master.is_file():
@@ -275,35 +271,10 @@ def test_a_compiled_master_runs_the_fmu(
         pytest.skip("no build tree")
     scene = load_scene("csfh")
     directory = Path(fmpy.extract(str(fmu_path)))
-    kind = {
-        v.name: {"Real": "r", "Boolean": "b"}.get(v.type, "i")
-        for v in model_description.modelVariables
-    }
-    starts = [
-        f"{vr[name]}:{kind[name]}={float(value)!r}"
-        for name, value in {
-            **scene.parameter_values("LN_spheres"),
-            **dict(zip(STATES, scene.x0, strict=True)),
-        }.items()
-    ]
-    out = subprocess.run(
-        [
-            str(master),
-            str(directory / "binaries" / "linux64" / "csfh.so"),
-            model_description.guid,
-            "1e-6",
-            "1e-3",
-            "0.3",
-            "1",
-            ",".join(str(vr[n]) for n in STATES),
-            str(vr["contact.count"]),
-            *starts,
-        ],
-        check=True,
-        capture_output=True,
-        text=True,
+    starts = {**scene.parameter_values("LN_spheres"), **dict(zip(STATES, scene.x0, strict=True))}
+    result = run_cs_master(
+        [str(master)], directory / "binaries" / "linux64" / "csfh.so", model_description, starts
     )
-    result = json.loads(out.stdout)
     tr = simulate_cs(scene, "LN_spheres", rtol=1e-6, communication_step=0.1, stop_time=0.3)
     final = np.array([tr.table[n][-1] for n in ("x", "y", "theta", "vx", "vy", "omega")])
     assert result["steps"] == 300

@@ -18,26 +18,22 @@ from typing import Any
 import fmpy
 import numpy as np
 import pytest
-from conftest import LogCapture
-from fmpy import extract, read_model_description
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.model_description import ModelDescription
 from fmpy.validation import validate_fmu
+from fmu_binaries import fmi2_functions
+from fmu_instances import Instances, LogCapture, built, unzip
+from oracles import EPS0
 
 ERROR = 3
-EPS0 = 8.8541878128e-12
-FMI2_EXPORTS = 44  # every fmi2 function of FMI 2.0 (ME and CS)
 
 
 @pytest.fixture(scope="session")
 def combdrive_path(fmu_path: Path) -> Path:
     from csfh.paths import combdrive_fmu_path
 
-    path = combdrive_fmu_path()
-    if not path.exists():
-        pytest.fail(f"{path} not found: it is built with csfh.fmu (cmake --build build)")
-    return path
+    return built(combdrive_fmu_path())
 
 
 @pytest.fixture(scope="session")
@@ -47,9 +43,7 @@ def combdrive_md(combdrive_path: Path) -> ModelDescription:
 
 @pytest.fixture(scope="session")
 def combdrive_dir(combdrive_path: Path, tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    directory = extract(str(combdrive_path), unzipdir=str(tmp_path_factory.mktemp("combdrive")))
-    yield directory
-    shutil.rmtree(directory, ignore_errors=True)
+    yield from unzip(combdrive_path, tmp_path_factory, "combdrive")
 
 
 @pytest.fixture(scope="session")
@@ -60,29 +54,13 @@ def cvr(combdrive_md: ModelDescription) -> dict[str, int]:
 @pytest.fixture
 def make_actuator(combdrive_md: ModelDescription, combdrive_dir: str):
     """make_actuator(kind='CS'|'ME') -> (fmu, log), instantiated; freed at the end."""
-    created: list[Any] = []
+    instances = Instances(combdrive_md, combdrive_dir, "actuator")
 
     def factory(kind: str = "CS") -> tuple[Any, LogCapture]:
-        cls = FMU2Slave if kind == "CS" else FMU2Model
-        interface = combdrive_md.coSimulation if kind == "CS" else combdrive_md.modelExchange
-        fmu = cls(
-            guid=combdrive_md.guid,
-            unzipDirectory=combdrive_dir,
-            modelIdentifier=interface.modelIdentifier,
-            instanceName="actuator",
-        )
-        log = LogCapture()
-        fmu.instantiate(callbacks=log.callbacks)
-        fmu._log = log  # keep the callbacks alive
-        created.append(fmu)
-        return fmu, log
+        return instances.make(kind)
 
     yield factory
-    for fmu in created:
-        try:
-            fmu.freeInstance()
-        except Exception:
-            pass
+    instances.free()
 
 
 MakeActuator = Callable[..., tuple[Any, LogCapture]]
@@ -124,7 +102,8 @@ def test_binary_exports_only_fmi2_and_links_only_libc_and_libm(combdrive_dir: st
         [nm, "-D", "--defined-only", str(binary)], check=True, capture_output=True, text=True
     ).stdout
     symbols = {line.split()[-1] for line in out.splitlines() if line.strip()}
-    assert len(symbols) == FMI2_EXPORTS and all(s.startswith("fmi2") for s in symbols), symbols
+    n_fmi2 = len(fmi2_functions())  # every fmi2 function of FMI 2.0 (ME and CS)
+    assert len(symbols) == n_fmi2 and all(s.startswith("fmi2") for s in symbols), symbols
     out = subprocess.run([ldd, str(binary)], check=True, capture_output=True, text=True).stdout
     libraries = {Path(line.split()[0]).name for line in out.splitlines() if line.strip()}
     allowed = re.compile(r"^(linux-vdso\.so|libc\.so|libm\.so|ld-linux[-\w.]*\.so)")

@@ -12,11 +12,9 @@ import numpy as np
 import pytest
 from fmi2_calls import METHODS, MakeFmu, cs_instance, grid, run, states
 from fmpy.model_description import ModelDescription
+from oracles import G
 
 from csfh.model.scene import Scene, load_scene
-
-G = 9.81
-
 
 TRIAL = "auto: trying BDF"  # auto's logEvents line when RK45 struggles
 

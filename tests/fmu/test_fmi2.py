@@ -28,56 +28,9 @@ from fmi2_calls import (
 from fmpy.fmi2 import fmi2CallbackFunctions, fmi2EventInfo
 from fmpy.model_description import ModelDescription
 from fmpy.validation import validate_fmu
+from fmu_binaries import fmi2_functions
 
 ME, CS = 0, 1  # fmi2Type
-
-ALL_FMI2_FUNCTIONS = {
-    "fmi2GetTypesPlatform",
-    "fmi2GetVersion",
-    "fmi2SetDebugLogging",
-    "fmi2Instantiate",
-    "fmi2FreeInstance",
-    "fmi2SetupExperiment",
-    "fmi2EnterInitializationMode",
-    "fmi2ExitInitializationMode",
-    "fmi2Terminate",
-    "fmi2Reset",
-    "fmi2GetReal",
-    "fmi2GetInteger",
-    "fmi2GetBoolean",
-    "fmi2GetString",
-    "fmi2SetReal",
-    "fmi2SetInteger",
-    "fmi2SetBoolean",
-    "fmi2SetString",
-    "fmi2GetFMUstate",
-    "fmi2SetFMUstate",
-    "fmi2FreeFMUstate",
-    "fmi2SerializedFMUstateSize",
-    "fmi2SerializeFMUstate",
-    "fmi2DeSerializeFMUstate",
-    "fmi2GetDirectionalDerivative",
-    "fmi2EnterEventMode",
-    "fmi2NewDiscreteStates",
-    "fmi2EnterContinuousTimeMode",
-    "fmi2CompletedIntegratorStep",
-    "fmi2SetTime",
-    "fmi2SetContinuousStates",
-    "fmi2GetDerivatives",
-    "fmi2GetEventIndicators",
-    "fmi2GetContinuousStates",
-    "fmi2GetNominalsOfContinuousStates",
-    "fmi2SetRealInputDerivatives",
-    "fmi2GetRealOutputDerivatives",
-    "fmi2DoStep",
-    "fmi2CancelStep",
-    "fmi2GetStatus",
-    "fmi2GetRealStatus",
-    "fmi2GetIntegerStatus",
-    "fmi2GetBooleanStatus",
-    "fmi2GetStringStatus",
-}
-
 
 # ------------------------------------------------------------------------------------------
 # helpers
@@ -206,7 +159,7 @@ def test_binary_exports_only_fmi2_symbols(unzipped: str) -> None:
     symbols = {line.split()[-1] for line in out.splitlines() if line.strip()}
     assert symbols, out
     assert {s for s in symbols if not s.startswith("fmi2")} == set()
-    assert symbols == ALL_FMI2_FUNCTIONS
+    assert symbols == fmi2_functions()
 
 
 def test_binary_links_only_libc_and_libm(unzipped: str) -> None:

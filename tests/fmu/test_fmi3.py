@@ -4,45 +4,37 @@ fmi3DoStep at a contact event, and bad input refused with a message naming the v
 
 from __future__ import annotations
 
-import glob
 import math
-import os
 import re
 import shutil
 import struct
 import subprocess
 import zipfile
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import fmpy
 import numpy as np
 import pytest
+from fmi2_calls import STATES
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Model, FMU3Slave, fmi3Float64
 from fmpy.model_description import ModelDescription
 from fmpy.validation import validate_fmu, validate_model_description
+from fmu_binaries import fmi3_functions, need, tool
 
 import csfh
 from csfh.model.scene import load_scene
 from csfh.runners.fmu import start_values
 
 OK, WARNING, ERROR = 0, 1, 3
-STATES = ["body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega"]
 SCENES = ["csfh", "central", "asymmetric"]
-HEADERS = Path(fmpy.__file__).parent / "c-code"
 
 
 @pytest.fixture(scope="module")
 def fmu2() -> Path:
     return csfh.fmu_path()
-
-
-@pytest.fixture(scope="module")
-def fmu3() -> Path:
-    return csfh.fmu_path(fmi_version=3)
 
 
 def fmu3_of(name: str) -> Path:
@@ -101,12 +93,6 @@ def test_fmi3_interface_is_the_fmi2_interface(name: str) -> None:
         assert [e.variable.name for e in md3.eventIndicators] == ["contact.gap"]
 
 
-def fmi3_functions() -> set[str]:
-    """Every function FMI 3.0 defines (fmi3Functions.h of the installed fmpy)."""
-    text = (HEADERS / "fmi3Functions.h").read_text()
-    return set(re.findall(r"^FMI3_Export\s+\w+TYPE\s+(fmi3\w+);", text, re.M))
-
-
 @pytest.mark.parametrize("name", ["csfh", "combdrive"])
 def test_fmi3_binary_exports_exactly_the_fmi3_functions(name: str, tmp_path: Path) -> None:
     nm = shutil.which("nm")
@@ -122,25 +108,6 @@ def test_fmi3_binary_exports_exactly_the_fmi3_functions(name: str, tmp_path: Pat
     expected = fmi3_functions()
     assert len(expected) > 60
     assert symbols == expected
-
-
-def need(condition: bool, reason: str) -> None:
-    """Skip when `condition` is false (a host-only build), but fail in CI (every platform)."""
-    if not condition:
-        if os.environ.get("CI"):
-            pytest.fail(f"{reason} (CI must build and check every platform)")
-        pytest.skip(reason)
-
-
-def tool(*names: str) -> str:
-    for name in names:
-        found = shutil.which(name) or next(
-            iter(sorted(glob.glob(f"/usr/bin/{name}-[0-9]*"), reverse=True)), None
-        )
-        if found:
-            return found
-    need(False, f"none of {names} is installed")
-    return ""
 
 
 PLATFORMS = {
@@ -250,18 +217,6 @@ class Log:
 
     def errors(self) -> list[str]:
         return [m for s, _, m in self.lines if s >= ERROR]
-
-
-@pytest.fixture(scope="module")
-def unzipped3(fmu3: Path, tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    directory = extract(str(fmu3), unzipdir=str(tmp_path_factory.mktemp("fmu3")))
-    yield directory
-    shutil.rmtree(directory, ignore_errors=True)
-
-
-@pytest.fixture(scope="module")
-def md3(fmu3: Path) -> ModelDescription:
-    return read_model_description(str(fmu3))
 
 
 def slave(md: ModelDescription, directory: str, log: Log, **kwargs: bool) -> FMU3Slave:

@@ -6,16 +6,14 @@ contains contact events (the discrete state changes there)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from ctypes import POINTER, c_double
 from typing import Any
 
 import numpy as np
 import pytest
+from fmi2_calls import STATES, MakeFmu, get_value, xml_start
 from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.model_description import ModelDescription
-
-MakeFmu = Callable[..., tuple[Any, Any]]
 
 T1 = 0.05
 T2 = 0.15
@@ -23,7 +21,6 @@ CS_STEP = 1e-3
 ME_STEP = 2e-5  # fixed-step RK4: the contact period is ~0.7 ms, omega dt ~ 0.2
 ME_RECORD_EVERY = 25
 
-STATES = ["body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega"]
 REAL_OUTPUTS = [
     *STATES,
     "contact.F_N",
@@ -316,28 +313,6 @@ def test_get_state_does_not_change_the_trajectory_much(
 # fmi2Reset
 
 
-def start_values(model_description: ModelDescription) -> dict[str, tuple[str, Any]]:
-    out: dict[str, tuple[str, Any]] = {}
-    for v in model_description.modelVariables:
-        if v.start is None:
-            continue
-        if v.type == "Real":
-            out[v.name] = ("Real", float(v.start))
-        elif v.type == "Boolean":
-            out[v.name] = ("Boolean", v.start in ("true", "1"))
-        else:
-            out[v.name] = ("Integer", int(v.start))
-    return out
-
-
-def read(fmu: FMU2Model | FMU2Slave, vr: dict[str, int], kind: str, name: str) -> Any:
-    if kind == "Real":
-        return fmu.getReal([vr[name]])[0]
-    if kind == "Boolean":
-        return bool(fmu.getBoolean([vr[name]])[0])
-    return fmu.getInteger([vr[name]])[0]
-
-
 @pytest.mark.parametrize("kind", ["ME", "CS"])
 def test_reset_returns_to_start_values(
     make_fmu: MakeFmu, vr: dict[str, int], model_description: ModelDescription, kind: str
@@ -362,8 +337,9 @@ def test_reset_returns_to_start_values(
     fmu.reset()
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
-    for name, (vtype, start) in start_values(model_description).items():
-        assert read(fmu, vr, vtype, name) == start, name
+    for v in model_description.modelVariables:
+        if v.start is not None:
+            assert get_value(fmu, v) == xml_start(v), v.name
     assert fmu.getReal([vr["time"]])[0] == 0.0
     counters = [vr[n] for n in vr if n.startswith("diagnostics.")]
     assert fmu.getInteger(counters) == [0] * len(counters)

@@ -35,17 +35,16 @@ stay physical: the gap never below -5e-4 m (issue 14) and no energy gain beyond 
 from __future__ import annotations
 
 import os
-import shutil
 import subprocess
-from collections.abc import Iterator
 from functools import cache
 from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description
+from fmpy import read_model_description
+from fmu_instances import built
+from oracles import G
 
-import csfh
 from csfh.model.scene import Scene, load_scene
 from csfh.runners.fmu import STATE_NAMES, simulate_me
 
@@ -54,26 +53,11 @@ SCENES = ("central", "asymmetric", "csfh")
 LAW = "LN_spheres"
 OUTPUTS = (*STATE_NAMES, "contact.gap", "contact.F_N", "energy.total", "contact.F_N_peak")
 COLUMN = {"body1.x": "x", "body1.y": "y", "body1.vy": "vy", "contact.F_N": "F_N"}
-G = 9.81
-
-
-@pytest.fixture(scope="module")
-def unzipped3(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    """The FMI 3.0 build of the FMU, unzipped."""
-    path = csfh.fmu_path(fmi_version=3)
-    if not path.exists():
-        pytest.fail(f"{path} not built: cmake -S . -B build && cmake --build build")
-    directory = extract(str(path), unzipdir=str(tmp_path_factory.mktemp("fmu3")))
-    yield directory
-    shutil.rmtree(directory, ignore_errors=True)
 
 
 def importer(name: str) -> Path:
     directory = Path(os.environ.get("CSFH_IMPORTERS_DIR", ROOT / "build" / "importers"))
-    path = directory / f"csfh_import_{name}"
-    if not path.exists():
-        pytest.fail(f"{path} not built: cmake -S . -B build && cmake --build build")
-    return path
+    return built(directory / f"csfh_import_{name}")
 
 
 def start_values(scene: Scene) -> list[str]:

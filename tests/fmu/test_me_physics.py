@@ -14,18 +14,14 @@ import fmpy
 import numpy as np
 import oracles
 import pytest
-from fmi2_calls import MakeFmu
+from fmi2_calls import STATES, MakeFmu
+from oracles import T_FIRST_CENTRAL, V_FIRST_CENTRAL, G
 
 from csfh.model.scene import load_scene
 from csfh.runners.fmu import simulate_me
 
-G = 9.81
 DELTA = 0.20 - 0.18  # R2 - R1 as the FMU computes it (0.02 + 1.7e-17)
 M1, I1 = 10.0, 0.1617  # Table 1
-# docs/model.md §7.1: free fall of 0.03 m from q0 = [0, 0.01, 0] to y = -delta
-T_FIRST_CENTRAL = math.sqrt(2 * 0.03 / G)
-V_FIRST_CENTRAL = math.sqrt(2 * G * 0.03)
-STATES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
 
 LAWS = ["LN_spheres", "LN_cylinders", "LN_ESDU", "HuntCrossley", "Flores"]
 

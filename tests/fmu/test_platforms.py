@@ -8,8 +8,6 @@ then skipped, except in CI (CI=true), where every platform must be there."""
 
 from __future__ import annotations
 
-import glob
-import json
 import os
 import re
 import shutil
@@ -20,50 +18,27 @@ from typing import Any
 
 import fmpy
 import pytest
+from fmi2_calls import STATE_SCALES, STATES
 from fmpy.model_description import ModelDescription
+from fmu_binaries import fmi2_functions, need, output, run_cs_master, tool
+from fmu_instances import fmu_file
 
 import csfh
 from csfh import Scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 BUILD = ROOT / "build"
-STATES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
-NOMINALS = (0.01, 0.01, 0.1, 0.1, 0.1, 1.0)  # m, m, rad, m/s, m/s, rad/s: the scale of each state
 # what a Windows DLL may import: the kernel and the Universal CRT (part of Windows 10 and later)
 WINDOWS_SYSTEM_DLL = re.compile(
     r"^(kernel32|ntdll|ucrtbase|api-ms-win-crt-[a-z]+-l1-1-0)\.dll$", re.IGNORECASE
 )
 
 
-def need(condition: bool, reason: str) -> None:
-    """Skip when `condition` is false, but fail in CI, where everything must be there."""
-    if not condition:
-        if os.environ.get("CI"):
-            pytest.fail(f"{reason} (CI must build and check every platform)")
-        pytest.skip(reason)
-
-
-def tool(*names: str) -> str:
-    """The first of `names` found on PATH (versioned LLVM names too: llvm-lipo-14, ...)."""
-    for name in names:
-        found = shutil.which(name) or next(
-            iter(sorted(glob.glob(f"/usr/bin/{name}-[0-9]*"), reverse=True)), None
-        )
-        if found:
-            return found
-    need(False, f"none of {names} is installed")
-    return ""
-
-
-def output(*command: str) -> str:
-    return subprocess.run(command, check=True, capture_output=True, text=True).stdout
-
-
 @pytest.fixture(scope="module", params=["csfh", "combdrive"])
 def fmu_dir(
     request: pytest.FixtureRequest, fmu_path: Path, tmp_path_factory: pytest.TempPathFactory
 ) -> Path:
-    path = fmu_path if request.param == "csfh" else fmu_path.parent / "combdrive.fmu"
+    path = fmu_file(fmu_path, request.param)
     return Path(fmpy.extract(str(path), unzipdir=str(tmp_path_factory.mktemp(request.param))))
 
 
@@ -109,7 +84,8 @@ def test_win64_exports_only_fmi2_and_imports_only_system_dlls(fmu_dir: Path) -> 
     assert dlls and [d for d in dlls if not WINDOWS_SYSTEM_DLL.match(d)] == [], dlls
     table = text.split("[Ordinal/Name Pointer] Table", 1)[1].split("\n\n", 1)[0]
     exports = set(re.findall(r"\]\s+(\S+)", table))
-    assert len(exports) == 44 and all(e.startswith("fmi2") for e in exports), sorted(exports)
+    n_fmi2 = len(fmi2_functions())
+    assert len(exports) == n_fmi2 and all(e.startswith("fmi2") for e in exports), sorted(exports)
 
 
 def test_darwin64_is_universal_and_exports_only_fmi2(fmu_dir: Path) -> None:
@@ -121,7 +97,8 @@ def test_darwin64_is_universal_and_exports_only_fmi2(fmu_dir: Path) -> None:
         symbols = {line.split()[-1] for line in text.splitlines() if line.strip()}
         # the two symbols every Mach-O dynamic library defines (the linker's, not ours)
         ours = symbols - {"__mh_dylib_header", "___dso_handle"}
-        assert len(ours) == 44 and all(s.startswith("_fmi2") for s in ours), sorted(symbols)
+        n_fmi2 = len(fmi2_functions())
+        assert len(ours) == n_fmi2 and all(s.startswith("_fmi2") for s in ours), sorted(symbols)
         libraries = output(
             tool("llvm-objdump"), "--macho", "--dylibs-used", f"--arch={arch}", str(path)
         )
@@ -140,44 +117,6 @@ def wine() -> list[str]:
             return [found]
     need(False, "wine64 not installed")
     return []
-
-
-def run_master(
-    command: list[str],
-    fmu_binary: Path,
-    md: ModelDescription,
-    starts: dict[str, Any],
-    rtol: float,
-    stop: float,
-    env: dict[str, str] | None = None,
-) -> dict[str, Any]:
-    """benchmarks/master/bench_cs_master.c (the co-simulation loop of a C importer) on a binary."""
-    variables = {v.name: v for v in md.modelVariables}
-    kind = {"Real": "r", "Boolean": "b"}
-    args = [
-        f"{variables[n].valueReference}:{kind.get(variables[n].type, 'i')}={float(v)!r}"
-        for n, v in starts.items()
-    ]
-    text = subprocess.run(
-        [
-            *command,
-            str(fmu_binary),
-            md.guid,
-            repr(rtol),
-            "1e-3",
-            repr(stop),
-            "1",
-            ",".join(str(variables[n].valueReference) for n in STATES),
-            str(variables["contact.count"].valueReference),
-            *args,
-        ],
-        check=True,
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=300,
-    ).stdout
-    return json.loads(text)
 
 
 def scene_starts(scene: Scene, law: str) -> dict[str, Any]:
@@ -226,13 +165,15 @@ def test_win64_under_wine_reproduces_linux64(
     command = wine()
     starts = scene_starts(load_scene(scene_name), law)
     so = binary(fmu_dir, "linux64", "csfh")
-    windows = run_master(
+    windows = run_cs_master(
         [*command, str(win_master)], dll, model_description, starts, rtol, stop, wine_env
     )
-    linux = run_master([str(linux_master)], so, model_description, starts, rtol, stop)
+    linux = run_cs_master([str(linux_master)], so, model_description, starts, rtol, stop)
     assert windows["steps"] == linux["steps"] == round(stop / 1e-3)
     assert windows["count"] == linux["count"] and linux["count"][0] >= 1
-    for name, w, lin, scale in zip(STATES, windows["read"], linux["read"], NOMINALS, strict=True):
+    for name, w, lin, scale in zip(
+        STATES, windows["read"], linux["read"], STATE_SCALES, strict=True
+    ):
         assert abs(w - lin) <= 1e-9 * max(abs(lin), scale), (name, w, lin)
 
 
@@ -319,6 +260,6 @@ def test_conformance_importers_under_wine_reproduce_linux64(
     assert tables["win64"][0] == header and len(tables["win64"][1]) == len(linux_rows) > 100
     assert tables["win64 events"] == tables["linux64 events"] >= 1 + min_events  # (+ the header)
     for j, column in enumerate(header):
-        scale = max(max(abs(r[j]) for r in linux_rows), NOMINALS[j - 1] if 1 <= j <= 6 else 0)
+        scale = max(max(abs(r[j]) for r in linux_rows), STATE_SCALES[j - 1] if 1 <= j <= 6 else 0)
         worst = max(abs(w[j] - r[j]) for w, r in zip(tables["win64"][1], linux_rows, strict=True))
         assert worst <= 1e-9 * scale, (column, worst, scale)

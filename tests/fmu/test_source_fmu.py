@@ -8,7 +8,6 @@ only the fmi2* functions."""
 from __future__ import annotations
 
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -20,6 +19,8 @@ import fmpy
 import numpy as np
 import pytest
 from fmpy.build import build_platform_binary
+from fmu_binaries import fmi2_functions
+from fmu_instances import fmu_file
 
 NOMINAL = {"body1.x": 0.01, "body1.y": 0.01, "body1.theta": 0.1}
 # the csfh FMU's own sources: the physics the FMU uses and the FMI glue, nothing of the harness
@@ -38,10 +39,6 @@ CSFH_SOURCES = {
     "csfh_variables.c",
 }
 NOT_IN_THE_FMU = {"csfh_moreau.c", "csfh_moreau_batch.c", "csfh_rk4event.c", "csfh_api.c"}
-
-
-def fmu_file(fmu_path: Path, name: str) -> Path:
-    return fmu_path if name == "csfh" else fmu_path.parent / "combdrive.fmu"
 
 
 @pytest.fixture(scope="module", params=["csfh", "combdrive"])
@@ -123,12 +120,6 @@ def test_binary_built_from_the_sources_reproduces_the_shipped_one(
         np.testing.assert_allclose(b[field], a[field], rtol=0, atol=1e-9 * scale, err_msg=field)
     if name == "csfh":
         assert np.max(a["contact.F_N"]) > 0  # the runs go through contacts
-
-
-def fmi2_functions() -> set[str]:
-    """Every function FMI 2.0 defines (fmi2Functions.h of the installed fmpy)."""
-    header = Path(fmpy.__file__).parent / "c-code" / "fmi2Functions.h"
-    return set(re.findall(r"^#define\s+(fmi2\w+)\s+fmi2FullName\(", header.read_text(), re.M))
 
 
 def test_binary_built_from_the_sources_exports_only_the_fmi2_functions(

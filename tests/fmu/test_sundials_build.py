@@ -5,54 +5,29 @@ every co-simulation method (benchmarks/bench_sundials_build.py measures the spee
 
 from __future__ import annotations
 
-import json
 import os
-import subprocess
 from pathlib import Path
 
 import fmpy
 import pytest
+from fmi2_calls import STATE_SCALES, STATES
 from fmpy.model_description import ModelDescription
+from fmu_binaries import run_cs_master
 
 from csfh import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
-STATES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
-SCALES = (0.01, 0.01, 0.1, 0.1, 0.1, 1.0)
 METHODS = {"auto": 1, "BDF": 2, "Adams": 3}
 
 
 def run(master: Path, binary: Path, md: ModelDescription, scene: str, method: int) -> dict:
-    variables = {v.name: v for v in md.modelVariables}
     sc = load_scene(scene)
     values = {
         **sc.parameter_values("LN_spheres"),
         **dict(zip(STATES, sc.x0, strict=True)),
         "solver.method": method,
     }
-    kind = {"Real": "r", "Boolean": "b"}
-    starts = [
-        f"{variables[n].valueReference}:{kind.get(variables[n].type, 'i')}={float(v)!r}"
-        for n, v in values.items()
-    ]
-    out = subprocess.run(
-        [
-            str(master),
-            str(binary),
-            md.guid,
-            "1e-6",
-            "1e-3",
-            "0.3",
-            "1",
-            ",".join(str(variables[n].valueReference) for n in STATES),
-            str(variables["contact.count"].valueReference),
-            *starts,
-        ],
-        check=True,
-        capture_output=True,
-        text=True,
-    )
-    return json.loads(out.stdout)
+    return run_cs_master([str(master)], binary, md, values)
 
 
 @pytest.mark.parametrize("scene", ["csfh", "central"])
@@ -73,5 +48,7 @@ def test_optimised_sundials_gives_debians_results(
     for binary in (shipped, host):
         result = run(master, binary, model_description, scene, METHODS[method])
         assert result["count"] == reference["count"]
-        for name, a, b, s in zip(STATES, result["read"], reference["read"], SCALES, strict=True):
+        for name, a, b, s in zip(
+            STATES, result["read"], reference["read"], STATE_SCALES, strict=True
+        ):
             assert abs(a - b) <= 1e-12 * s, (binary, name, a, b)

@@ -10,6 +10,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from oracles import G, rigid_impact_times
 
 from csfh.model.scene import load_scene
 from csfh.runners.fmu import simulate_me
@@ -18,18 +19,6 @@ from csfh.runners.rk4 import rk4_event
 from csfh.studies.accuracy.metrics import contact_errors, observed_order
 from csfh.studies.accuracy.report import write_report
 from csfh.studies.accuracy.study import QUICK_SETTINGS, _grid, default_horizon, run_study
-
-G, CR = 9.81, 0.9
-
-
-def rigid_impact_times(n: int) -> np.ndarray:
-    """docs/model.md §7.4: exact rigid bounce sequence of the central scene."""
-    t = [math.sqrt(2 * 0.03 / G)]
-    v = math.sqrt(2 * G * 0.03)
-    for _ in range(n - 1):
-        v *= CR
-        t.append(t[-1] + 2 * v / G)
-    return np.array(t)
 
 
 def test_moreau_is_first_order_in_the_impact_times() -> None:

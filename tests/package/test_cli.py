@@ -13,18 +13,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from csfh_command import run_csfh
 
 import csfh
 from csfh.cli.main import build_parser, main
 
 ROOT = Path(__file__).resolve().parents[2]
 HEAVY = ("numpy", "scipy", "matplotlib", "fmpy", "tqdm", "distributed", "libcosimpy")
-
-
-def run_csfh(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "csfh", *args], capture_output=True, text=True, check=False
-    )
 
 
 def test_help_starts_in_a_fraction_of_a_second() -> None:
@@ -131,22 +126,7 @@ def test_user_scene_file_runs(tmp_path: Path) -> None:
         'name = "mine"\nstop_time = 0.1\n[initial]\nq = [0.005, 0.0, 0.0]\n'
         '[parts]\nflexure = false\n[parameters]\n"contact.cr" = 0.5\n'
     )
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "csfh",
-            "run",
-            str(path),
-            "--law",
-            "Flores",
-            "--out",
-            str(tmp_path / "out"),
-            "--quiet",
-        ],
-        capture_output=True,
-        text=True,
-    )
+    proc = run_csfh("run", str(path), "--law", "Flores", "--out", str(tmp_path / "out"), "--quiet")
     assert proc.returncode == 0, proc.stderr
     data = np.genfromtxt(tmp_path / "out" / "Flores.csv", delimiter=",", names=True)
     assert data["t_s"][-1] == pytest.approx(0.1)

@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 import pytest
+from csfh_command import run_csfh
 
 ROOT = Path(__file__).resolve().parents[2]
 TIME_LIMIT = 20.0
@@ -36,15 +37,7 @@ def run_cli(
     args: list[str], cwd: Path, env: dict[str, str] | None = None
 ) -> tuple[subprocess.CompletedProcess[str], float]:
     t0 = time.perf_counter()
-    proc = subprocess.run(
-        [sys.executable, "-m", "csfh", *args],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-        env=env or csfh_env(),
-        timeout=120,
-        check=False,
-    )
+    proc = run_csfh(*args, cwd=cwd, env=env or csfh_env(), timeout=120)
     return proc, time.perf_counter() - t0
 
 
@@ -319,17 +312,7 @@ def test_ctrl_c_while_starting_up_is_one_line(
 
 
 def test_cli_unknown_scene_and_law(tmp_path: Path) -> None:
-    proc = subprocess.run(
-        [sys.executable, "-m", "csfh", "run", "nowhere", "--law", "Moreau"],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-    )
+    proc = run_csfh("run", "nowhere", "--law", "Moreau", cwd=tmp_path)
     assert proc.returncode == 2 and "unknown scene 'nowhere'" in proc.stderr
-    proc = subprocess.run(
-        [sys.executable, "-m", "csfh", "run", "central", "--law", "Bogus"],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-    )
+    proc = run_csfh("run", "central", "--law", "Bogus", cwd=tmp_path)
     assert proc.returncode == 2 and "Bogus" in proc.stderr

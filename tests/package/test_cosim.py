@@ -4,26 +4,16 @@ libcosim (libcosimpy), the [cosim] scene section and `csfh cosim`."""
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from csfh_command import run_csfh
+from oracles import K_COMB, G
 
 from csfh.cosim.run import cosimulate
 from csfh.model.scene import SceneError, load_scene, scene_from_dict
-
-
-@pytest.fixture
-def libcosim() -> None:
-    """The libcosimpy engine (installed by tools/setup.sh: pip install .[cosim])."""
-    pytest.importorskip("libcosimpy")
-
-
-G = 9.81
-K_COMB = 20000 * 8.8541878128e-12 * 0.025 / 5e-6  # n eps t / g of the combdrive scene, N/V^2
 
 
 def scene_dict(**cosim: Any) -> dict[str, Any]:
@@ -103,23 +93,7 @@ def test_the_actuator_force_drives_the_hinge(engine: str) -> None:
 
 def test_cli_cosim_writes_csv_and_figure(tmp_path: Path) -> None:
     out = tmp_path / "out"
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "csfh",
-            "cosim",
-            "combdrive",
-            "--out",
-            str(out),
-            "--quiet",
-            "--stop-time",
-            "0.25",
-        ],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
+    proc = run_csfh("cosim", "combdrive", "--out", str(out), "--quiet", "--stop-time", "0.25")
     assert proc.returncode == 0, proc.stderr
     assert "combdrive / cosim-fmpy-jacobi:" in proc.stdout and "contacts" in proc.stdout
     csv = out / "cosim_fmpy.csv"
@@ -175,12 +149,7 @@ def test_driven_inputs_and_enumerations_are_refused(tmp_path: Path, libcosim: No
     assert np.max(np.abs(a["F_N"] - spheres["F_N"])) > 1.0  # another law indeed
     scene = tmp_path / "plain.toml"
     scene.write_text('name = "plain"\n')
-    proc = subprocess.run(
-        [sys.executable, "-m", "csfh", "cosim", str(scene)],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
+    proc = run_csfh("cosim", str(scene))
     assert proc.returncode == 2
     assert proc.stderr.strip().endswith("the scene has no [cosim] section"), proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1

@@ -9,16 +9,14 @@ import math
 
 import numpy as np
 import pytest
+from oracles import V_FIRST_CENTRAL, G, rigid_impact_times
 
 from csfh.model.core import CoreModel
 from csfh.model.scene import load_scene, scene_from_dict
 from csfh.runners.moreau import moreau
 from csfh.runners.moreau_batch import moreau_batch
 
-G = 9.81
 CR = 0.9
-T_FIRST_CENTRAL = math.sqrt(2 * 0.03 / G)  # docs/model.md §7.1
-V_IMPACT = math.sqrt(2 * G * 0.03)
 
 
 # ------------------------------------------------------------------------------------------
@@ -34,11 +32,7 @@ def central_moreau():
 def test_moreau_impact_steps_and_restitution(central_moreau) -> None:
     """7.4: impact times of the rigid bounce sequence, v+/v- = c_r exactly."""
     imp = central_moreau.impacts
-    exact = [T_FIRST_CENTRAL]
-    v = V_IMPACT
-    for _ in range(5):
-        v *= CR
-        exact.append(exact[-1] + 2 * v / G)
+    exact = rigid_impact_times(6, CR)
     h = 1e-5
     for k, t_exact in enumerate(exact):
         # the impact step starts at most a few steps after the exact instant (6.3)
@@ -63,7 +57,7 @@ def test_moreau_apex_heights_scale_by_cr_squared(central_moreau) -> None:
 def test_moreau_peak_impulse(central_moreau) -> None:
     """7.4: Lambda_N = m1 (1 + c_r) v_imp at the first impact (14.577 N s), F = Lambda/h."""
     imp = central_moreau.impacts
-    assert imp["Lambda_N"][0] == pytest.approx(10 * (1 + CR) * V_IMPACT, rel=1e-3)
+    assert imp["Lambda_N"][0] == pytest.approx(10 * (1 + CR) * V_FIRST_CENTRAL, rel=1e-3)
     assert central_moreau.summary()["max_F_N"] == pytest.approx(imp["Lambda_N"][0] / 1e-5, rel=1e-9)
 
 

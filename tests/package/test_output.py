@@ -9,12 +9,11 @@ import ast
 import json
 import os
 import signal
-import subprocess
-import sys
 import textwrap
 from pathlib import Path
 
 import pytest
+from csfh_command import run_csfh
 
 import csfh.output as output
 from csfh.cli.main import main
@@ -170,14 +169,7 @@ def test_ctrl_c_at_a_controlled_point_of_the_command_line(
         "[initial]\nq = [0.0, 0.01, 0.0]\n"
     )
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(hook), str(ROOT / "python")]))
-    proc = subprocess.run(
-        [sys.executable, "-m", "csfh", "compare", str(scene), "--out", str(out), "--quiet"],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=300,
-        check=False,
-    )
+    proc = run_csfh("compare", str(scene), "--out", str(out), "--quiet", env=env, timeout=300)
     assert proc.returncode in (130, -signal.SIGINT), proc.stderr
     assert proc.stderr.strip().splitlines()[-1] == "csfh: interrupted", proc.stderr
     assert snapshot(out) == before

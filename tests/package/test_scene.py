@@ -4,11 +4,10 @@ and the value, by the loader and by the command line."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from csfh_command import run_csfh
 
 from csfh.model.instance import core_model
 from csfh.model.scene import SceneError, load_scene, scene_from_dict
@@ -81,21 +80,7 @@ def test_bad_scene_file_one_line_error(tmp_path: Path, text: str, message: str) 
     with pytest.raises(SceneError, match=r"bad\.toml") as info:
         load_scene(path)
     assert message in str(info.value)
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "csfh",
-            "run",
-            str(path),
-            "--law",
-            "Moreau",
-            "--out",
-            str(tmp_path / "o"),
-        ],
-        capture_output=True,
-        text=True,
-    )
+    proc = run_csfh("run", str(path), "--law", "Moreau", "--out", str(tmp_path / "o"))
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], proc.stderr
@@ -103,8 +88,6 @@ def test_bad_scene_file_one_line_error(tmp_path: Path, text: str, message: str) 
 
 def test_scene_loader_refuses_a_deep_start(tmp_path) -> None:
     """The scene loader says the same in one line, and the CLI exits 2 with it."""
-    import subprocess
-    import sys
 
     from csfh.model.scene import SceneError, scene_from_dict
 
@@ -114,12 +97,7 @@ def test_scene_loader_refuses_a_deep_start(tmp_path) -> None:
     assert "0.03 m deep" in str(info.value) and "contact.max_initial_indentation" in str(info.value)
     path = tmp_path / "huge.toml"
     path.write_text('name = "huge"\n[initial]\nq = [1e10, 0.0, 0.0]\n')
-    r = subprocess.run(
-        [sys.executable, "-m", "csfh", "run", str(path), "--law", "LN_spheres"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    r = run_csfh("run", str(path), "--law", "LN_spheres", timeout=120)
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "deep in the bore" in r.stderr
     # an override of the limit lets a deeper start through (1.5e-3 m > 1e-3 m), up to the

@@ -20,14 +20,13 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from csfh_command import run_csfh
 from fmpy.fmi2 import FMU2Model
 from scipy.stats import binom
 
@@ -369,12 +368,6 @@ def test_clopper_pearson_covers_at_least_the_confidence(n: int) -> None:
 
 # ------------------------------------------------------------------------------------------
 # the command
-
-
-def run_csfh(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "csfh", *args], capture_output=True, text=True, check=False
-    )
 
 
 @pytest.mark.parametrize(

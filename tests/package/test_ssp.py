@@ -7,8 +7,6 @@ from __future__ import annotations
 import io
 import math
 import os
-import subprocess
-import sys
 import tomllib
 import zipfile
 from pathlib import Path
@@ -17,7 +15,9 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 import pytest
+from csfh_command import run_csfh
 from fmpy import read_model_description
+from oracles import K_COMB
 
 import csfh
 from csfh.cosim.fmpy_master import run_fmpy
@@ -34,7 +34,6 @@ from csfh.model.scene import load_scene, scene_from_dict
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE_FILE = ROOT / "python" / "csfh" / "scenes" / "combdrive.toml"
-K_COMB = 20000 * 8.8541878128e-12 * 0.025 / 5e-6  # n eps t / g of the combdrive scene, N/V^2
 T = 0.3  # s: the ramp and the first two contacts of the combdrive scene
 WATCH = {
     "csfh": ["body1.x", "body1.y", "body1.theta", "body1.vy", "contact.count"],
@@ -42,21 +41,11 @@ WATCH = {
 }
 
 
-@pytest.fixture
-def libcosim() -> None:
-    pytest.importorskip("libcosimpy")
-
-
 @pytest.fixture(scope="module")
 def archive(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The combdrive scene exported by the command line."""
     path = tmp_path_factory.mktemp("ssp") / "combdrive.ssp"
-    proc = subprocess.run(
-        [sys.executable, "-m", "csfh", "cosim", "combdrive", "--export-ssp", str(path)],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
+    proc = run_csfh("cosim", "combdrive", "--export-ssp", str(path))
     assert proc.returncode == 0, proc.stderr
     assert str(path) in proc.stdout
     return path
@@ -178,12 +167,7 @@ def test_export_is_atomic_and_bad_input_is_one_line(tmp_path: Path) -> None:
         (["combdrive", "--export-ssp", str(tmp_path / "no" / "x.ssp")], "does not exist"),
     ]
     for args, message in cases:
-        proc = subprocess.run(
-            [sys.executable, "-m", "csfh", "cosim", *args],
-            capture_output=True,
-            text=True,
-            check=False,
-        )
+        proc = run_csfh("cosim", *args)
         assert proc.returncode == 2, proc.stderr
         lines = proc.stderr.strip().splitlines()
         assert len(lines) == 1 and message in lines[0], proc.stderr
