@@ -1,5 +1,4 @@
-"""Running the FMU: model exchange with fmpy's CVode, co-simulation through fmi2DoStep, and a
-thin pass-through to fmpy.simulate_fmu.
+"""Running the FMU: model exchange with fmpy's CVode, and co-simulation through fmi2DoStep.
 
 The model-exchange driver is fmpy's FMU2Model with fmpy's bundled CVODE (BDF, dense direct solver,
 root finding on the event indicator), stepped one internal step at a time so that every step can be
@@ -705,34 +704,3 @@ def simulate_cs(
         "do_step_time": do_step_time,
     }
     return tr
-
-
-def simulate_fmpy(
-    scene: Scene,
-    law: str,
-    *,
-    rtol: float | None = None,
-    output_interval: float | None = None,
-    **kwargs: Any,
-) -> dict[str, np.ndarray]:
-    """fmpy.simulate_fmu in model exchange with CVode, as fmpy does it (for cross-checks).
-    Mind fmpy's limit of 500 internal CVode steps per output interval."""
-    import fmpy
-
-    values: dict[str, Any] = dict(scene.parameter_values(law))
-    values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
-    values.update(scene.inputs)
-    result = fmpy.simulate_fmu(
-        str(fmu_path()),
-        fmi_type="ModelExchange",
-        stop_time=scene.stop_time,
-        relative_tolerance=scene.integrator.rtol if rtol is None else rtol,
-        output_interval=scene.integrator.output_interval
-        if output_interval is None
-        else output_interval,
-        start_values=values,
-        record_events=True,
-        output=[*OUTPUT_NAMES.values(), "contact.count"],
-        **kwargs,
-    )
-    return {name: np.asarray(result[name]) for name in result.dtype.names}
