@@ -117,9 +117,9 @@ _ME_RECORDS: dict[str, dict[str, np.ndarray]] = {}
 def test_default_tolerance_gives_accurate_impacts(name: str, method: str) -> None:
     """At the FMU's default tolerance (1e-6) every method gets the first three impacts right against
     model exchange at rtol 1e-12: onset times within 3e-5 s, onset and release speeds within
-    3e-4 relative. (Before the contact force was confined to the contact mode, a CVODE step that
-    reached past an onset carried the stiff contact force into the interpolant the root finder
-    uses: Adams then had the csfh scene's first onset speed 1e-3 off, the next onsets 1e-4 s.)"""
+    3e-4 relative. (The contact force acts in the contact mode only: otherwise a CVODE step that
+    reaches past an onset carries the stiff contact force into the interpolant the root finder
+    uses, and Adams has the csfh scene's first onset speed 1e-3 off, the next onsets 1e-4 s.)"""
     scene = load_scene(name)
     if name not in _ME_RECORDS:
         _ME_RECORDS[name] = simulate_me(scene, "LN_spheres", rtol=1e-12).contact_records
@@ -197,8 +197,8 @@ def test_variable_step_sizes_give_the_fixed_step_trajectory(
     same integrator steps: the same number of them, the same contacts and, at every 0.1 s, the
     same state. "The same" is measured against what a different sequence of steps of the same
     accuracy makes: the fixed grid once more at rtol 1.1e-10 moves the states by ~1e-9 m,
-    1e-8 m/s and the onsets by ~5e-9 s (before, with a stop time at every communication point,
-    the two grids differed by up to 1e-7); the two grids must agree to a tenth of that, which
+    1e-8 m/s and the onsets by ~5e-9 s (a stop time at every communication point would make the
+    two grids differ by up to 1e-7); the two grids must agree to a tenth of that, which
     leaves round-off (a few 1e-12 m) out of the question."""
     scene = load_scene("csfh")
     blocks = [0.1 * k for k in range(1, 6)]

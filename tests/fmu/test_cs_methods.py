@@ -185,8 +185,8 @@ def test_autos_decisions_do_not_depend_on_the_communication_grid(
     step's end). On the undamped pendulum of the test above (several trials of BDF and returns
     to RK45 in 1 s), 1e-2 s communication steps and a random grid of 1e-5 s to 0.05 s steps give
     the same decisions at the same times, the same number of integrator steps and the same state
-    at 1 s to round-off. (Before, a step that reached a communication point was never judged:
-    the window was judged one step later, and the grid changed the trajectory.)"""
+    at 1 s to round-off. (A step that reached a communication point and was not judged would
+    have its window judged one step later, and the grid would change the trajectory.)"""
     scene = pendulum_scene(1.0, 0.5)
     lines = re.compile(r"t = \S+: auto: .*")
 

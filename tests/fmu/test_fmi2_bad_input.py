@@ -173,8 +173,8 @@ def test_a_start_deep_in_the_bore_is_refused(
     make_fmu: MakeFmu, vr: dict[str, int], kind: str
 ) -> None:
     """q0 = [0.05, 0, 0] with the clearance 0.02 m is 0.03 m deep: fmi2ExitInitializationMode
-    returns fmi2Error naming the state and the indentation (before: a silent run with
-    F_N = 2.5e8 N); at the limit it starts, and the limit is a parameter."""
+    returns fmi2Error naming the state and the indentation (accepted, it would run silently
+    with F_N = 2.5e8 N); at the limit it starts, and the limit is a parameter."""
     from fmpy.fmi1 import FMICallException
 
     fmu, log = make_fmu(kind)
@@ -262,7 +262,7 @@ def test_non_finite_input_after_initialization(
 def test_set_with_one_bad_value_changes_nothing(
     make_fmu: MakeFmu, vr: dict[str, int], model_description: ModelDescription, kind: str
 ) -> None:
-    """fmi2SetReal([c_r, m], [0.5, -1]) applied c_r before it refused m; now nothing is set."""
+    """fmi2SetReal([c_r, m], [0.5, -1]) refuses m and sets nothing, not even c_r."""
     fmu, log = make_fmu(kind)
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
@@ -328,8 +328,8 @@ def test_non_finite_contact_force_is_an_error(make_fmu: MakeFmu, vr: dict[str, i
 
 def test_non_finite_event_indicator_is_an_error(make_fmu: MakeFmu, vr: dict[str, int]) -> None:
     """States at the edge of the double range (each finite, as any start value may be) give a
-    gap of -inf: fmi2GetEventIndicators returned it with fmi2OK. Now fmi2Error naming the
-    indicator and the state."""
+    gap of -inf: fmi2GetEventIndicators returns fmi2Error naming the indicator and the state,
+    not the -inf with fmi2OK."""
     fmu, log = make_fmu("ME")
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()

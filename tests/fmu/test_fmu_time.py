@@ -82,8 +82,8 @@ def test_cs_start_time_does_not_change_the_trajectory(
 ) -> None:
     """A start time of 1e10 s reproduces the run from 0, shifted, to 1e-9 relative (CVODE in a
     local time from an origin the instance holds): 0.3 s of the csfh scene with several
-    contacts, on a grid the double time represents exactly at t0. Before, CVODE in the
-    absolute time logged "t + h = t", returned fmi2OK and drifted."""
+    contacts, on a grid the double time represents exactly at t0. (CVODE in the absolute time
+    would log "t + h = t", return fmi2OK and drift.)"""
     steps = [H_EXACT] * round(0.3 / H_EXACT)
     reference, shifted, statuses, log = shifted_runs(make_fmu, vr, t0, steps)
     assert reference[-1, -1] >= 2, "the window must contain contacts"
@@ -116,7 +116,8 @@ def test_cs_conservative_run_keeps_its_energy_at_a_large_start_time(
 ) -> None:
     """From t0 = 1e10 s the energy of a conservative run is the run from 0's, to 1e-9 relative,
     and so stays within the integration error (4e-4 of E at rtol 1e-6 through five impacts).
-    Before: +68 % from 1e10 s; from 1e11 s the step failed after 500000 CVODE steps."""
+    (In the absolute time it gains 68 % from 1e10 s, and from 1e11 s the step fails after
+    500000 CVODE steps.)"""
     reference = conservative_energy(make_fmu, vr, 0.0)
     assert np.max(np.abs(reference - reference[0])) < 1e-3 * abs(reference[0])
     for t0 in (1e10, 1e11):
@@ -233,9 +234,9 @@ def test_communication_point_within_round_off_is_taken(
 def test_communication_point_beyond_round_off_is_refused(
     make_fmu: MakeFmu, vr: dict[str, int], model_description: ModelDescription, offset: float
 ) -> None:
-    """Behind the FMU's time by more than round-off (1e-10 s at t = 0.3 s was taken before: the
-    rule was 1e-9 (1 + |t|), and the time went backwards) or ahead of it: fmi2Error, nothing
-    changes, the instance goes on."""
+    """Behind the FMU's time by more than round-off (a rule of 1e-9 (1 + |t|) would take 1e-10 s
+    at t = 0.3 s, and the time would go backwards) or ahead of it: fmi2Error, nothing changes,
+    the instance goes on."""
     fmu, log, T = stepped_to(make_fmu, vr, 0.3)
     t = T + offset
     assert abs(t - T) > ROUNDOFF * max(abs(t), abs(T))
@@ -250,17 +251,17 @@ def test_time_never_goes_backwards(
     make_fmu: MakeFmu, vr: dict[str, int], model_description: ModelDescription
 ) -> None:
     """A point within round-off behind T with a step that ends before T would take the time
-    back: refused. (Before: a point 1e-10 s behind with a step of 1e-11 s set the time to
-    T - 9e-11.)"""
+    back: refused, as is the point 1e-10 s behind with a step of 1e-11 s that a rule of
+    1e-9 (1 + |t|) would take, setting the time to T - 9e-11."""
     fmu, _, T = stepped_to(make_fmu, vr, 0.3)
     t = T - 4 * ulp(T)
     before = all_values(fmu, model_description)
     assert step_status(fmu, t, 2 * ulp(T)) == ERROR
     assert_same(all_values(fmu, model_description), before)
     assert fmu.getReal([vr["time"]])[0] == T
-    old_rule, _, T2 = stepped_to(make_fmu, vr, 0.3)  # what the old rule took
-    assert step_status(old_rule, T2 - 1e-10, 1e-11) == ERROR
-    assert old_rule.getReal([vr["time"]])[0] == T2
+    loose, _, T2 = stepped_to(make_fmu, vr, 0.3)  # what a rule of 1e-9 (1 + |t|) takes
+    assert step_status(loose, T2 - 1e-10, 1e-11) == ERROR
+    assert loose.getReal([vr["time"]])[0] == T2
 
 
 def test_masters_time_arithmetic_is_accepted(make_fmu: MakeFmu, vr: dict[str, int]) -> None:

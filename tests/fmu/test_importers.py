@@ -1,4 +1,4 @@
-"""The FMU in importers other than the harness (issue 14).
+"""The FMU in importers other than the harness.
 
 Our own conformance importers (tests/importers/, plain C, built into build/importers/) run the
 `central`, `asymmetric` and `csfh` scenes and are compared with fmpy model exchange at rtol 1e-10
@@ -29,7 +29,7 @@ contact times to 1e-7 s (observed <= 3e-8 s), on vy to 2e-4 m/s (the timing diff
 the contact deceleration, ~3e3 m/s^2) and on F_N to 2e-4 of its peak (same reason). Euler is
 first order: before the first contact its error is the free-fall bound g h t / 2 (checked against
 g h t); the first onset comes at most one step late plus that drift; over the whole run it must
-stay physical: the gap never below -5e-4 m (issue 14) and no energy gain beyond 1 %.
+stay physical: the gap never below -5e-4 m and no energy gain beyond 1 %.
 """
 
 from __future__ import annotations
@@ -150,8 +150,8 @@ def test_me_cvode_importer_matches_fmpy(
     valuesOfContinuousStatesChanged), so re-initialising only when told gives the same solution
     as re-initialising always, and both match fmpy (FMI 2.0) at rtol 1e-10. A wrong flag is
     caught: never set, `reinits` stays 0 (asserted equal to the number of events) and CVODE goes
-    on with a stale history (before the FMU set the flag, mode `flags` failed CVODE's error test
-    at t = 0.072-0.137 s); set when nothing changed, `reinits` exceeds it only if there are
+    on with a stale history (mode `flags` then fails CVODE's error test at t = 0.072-0.137 s);
+    set when nothing changed, `reinits` exceeds it only if there are
     extra events, which the event-time check catches."""
     scene = load_scene(scene_name)
     run = run_importer(
@@ -208,7 +208,7 @@ def test_explicit_euler_at_the_default_step_stays_physical(
     assert run.value("t_reached") == pytest.approx(stop, abs=1e-12)
     assert run.value("steps") == round(stop / h)
     ref = reference(scene_name)
-    # physical over every step: the issue's bound, and near the reference's deepest penetration
+    # physical over every step: -5e-4 m, and near the reference's deepest penetration
     deepest = -float(np.max(ref.contact_records["max_indentation"]))  # refined on the interpolant
     assert run.value("min contact.gap") >= -5e-4
     assert run.value("min contact.gap") >= 1.5 * deepest

@@ -1,4 +1,4 @@
-"""The FMU in co-simulation engines installed from the package registries (issue 14): libcosim
+"""The FMU in co-simulation engines installed from the package registries: libcosim
 (libcosimpy) and Ecos (ecospy), both installed by tools/setup.sh (pip install .[cosim]; ecospy
 needs Debian's libtbb12). Both ignore FMI 2.0 Enumeration variables, so the contact law is chosen
 through the Integer contact.law_number; both call fmi2DoStep with a fixed step and leave the

@@ -147,9 +147,9 @@ def test_restored_state_with_a_bad_real_is_refused(
     name: str,
     bad: float,
 ) -> None:
-    """body1.m = -10 in the bytes of a state was accepted and the run exploded; a NaN state, an
-    infinite input, c_r out of (0, 1], a NaN time likewise. Now: fmi2Error naming the variable
-    and the value, the instance exactly as it was, and usable."""
+    """body1.m = -10 in the bytes of a state (accepted, the run would explode), a NaN state, an
+    infinite input, c_r out of (0, 1], a NaN time: fmi2Error naming the variable and the value,
+    the instance exactly as it was, and usable."""
     fmu, log = make_fmu(kind)
     distinct_scene(fmu, vr)
     data = serialized(fmu)
@@ -205,7 +205,8 @@ def test_restored_state_with_a_bad_enumeration_or_boolean_is_refused(
     other: int,
     bad: int,
 ) -> None:
-    """contact.law = 77 in a state was accepted (the normal force then fell through every law)."""
+    """contact.law = 77 in a state is refused (accepted, the normal force would fall through
+    every law)."""
     fmu, log = make_fmu(kind)
     data, at = int_field_state(fmu, vr, name, setter, good, other)
     assert struct.unpack_from("<i", data, at)[0] == good
@@ -251,10 +252,10 @@ def test_restored_state_with_a_bad_instance_state_is_refused(
     path: str,
     bad: int | str,
 ) -> None:
-    """An instance-state field of 0 was accepted and left the instance refusing every call but
-    fmi2FreeInstance; two bits, the Error state (never entered by this FMU), a bit that is no
-    state, or a state of the other interface (e.g. ContinuousTimeMode in a co-simulation
-    instance) are refused likewise, and the instance goes on."""
+    """An instance-state field of 0 (accepted, it would leave the instance refusing every call
+    but fmi2FreeInstance), two bits, the Error state (never entered by this FMU), a bit that is
+    no state, or a state of the other interface (e.g. ContinuousTimeMode in a co-simulation
+    instance) is refused, and the instance goes on."""
     fmu, log = make_fmu(kind)
     data, at = instance_state_offset(fmu, vr, kind)
     if bad == "other-interface":
@@ -271,8 +272,8 @@ def test_restored_state_with_a_bad_instance_state_is_refused(
 def test_restored_state_recomputes_derived_quantities(
     make_fmu: MakeFmu, vr: dict[str, int], kind: str
 ) -> None:
-    """The calculated parameters (contact.xi, contact.delta, ...) were read from the bytes of a
-    restored state; now they are computed from its parameters, whatever the bytes say."""
+    """The calculated parameters (contact.xi, contact.delta, ...) of a restored state are
+    computed from its parameters, whatever its bytes say."""
     fmu, log = make_fmu(kind)
     distinct_scene(fmu, vr)
     xi, delta = fmu.getReal([vr["contact.xi"], vr["contact.delta"]])

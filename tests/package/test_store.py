@@ -159,8 +159,8 @@ def test_a_torn_last_line_and_a_later_append_stay_apart(
 def test_the_sweep_command_reports_the_skipped_records_and_recomputes_only_them(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """The case of the issue: a sweep that lost one signals file and has one damaged line kept
-    2 of its records and computed the others again; now it computes exactly those two."""
+    """A sweep that lost one signals file and has one damaged line keeps all its other records
+    and computes exactly those two again."""
     args = ["sweep", "central", "--models", "Moreau", "LN_cylinders", "--params", "R1", "m1"]
     args += ["--stop-time", "0.1", "--quiet", "--workers", "1", "--out", str(tmp_path)]
     assert main(args) == 0
