@@ -16,7 +16,7 @@
 #   csfh_add_test_importer(TARGET SOURCES ... [LINK ...])
 #       a C importer (an executable that loads FMU binaries, portable between POSIX and Windows):
 #       built by the host build and by every cross build, so the same importer runs the FMU of
-#       each platform (win64: under wine, tests/python/test_platforms.py)
+#       each platform (win64: under wine, tests/fmu/test_platforms.py)
 #   csfh_add_fmu_package(NAME ...)   build/<NAME>.fmu, see below
 #   csfh_add_fmu3_package(NAME ...)  build/fmi3/<NAME>.fmu, the FMI 3.0 build, see below
 

@@ -17,7 +17,7 @@
  * The headers are fmpy's FMI 2.0 headers, as for the FMU itself. Portable C11: POSIX (dlopen,
  * clock_gettime) or Windows (LoadLibrary, QueryPerformanceCounter), so the same master runs the
  * win64 binary (cross-built by cmake/platforms.cmake, run under wine in
- * tests/python/test_platforms.py). */
+ * tests/fmu/test_platforms.py). */
 #if defined(_WIN32)
 #include <windows.h>
 #else

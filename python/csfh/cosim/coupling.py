@@ -17,7 +17,7 @@ step (zero-order hold; the csfh FMU restarts CVODE when an input changes).
 
 * Jacobi (default): every FMU steps from t_k to t_k+1 with the inputs it holds at t_k; outputs are
   exchanged after all have stepped. This is libcosim's fixed-step algorithm, so the two engines
-  compute the same thing and agree to round-off (tests/python/test_cosim.py). The actuator is
+  compute the same thing and agree to round-off (tests/package/test_cosim.py). The actuator is
   algebraic (direct feedthrough), so the hinge sees during [t_k, t_k+1] the force of V(t_k-1),
   theta(t_k-1): one communication step of delay.
 * Gauss-Seidel (fmpy engine only): at t_k the actuator is evaluated first, with V(t_k) and the

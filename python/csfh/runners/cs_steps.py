@@ -7,7 +7,7 @@ and the FMU's code and data no longer in the caches after the interpreter's work
 on a fine communication grid, or on a run of few steps timed against a compiled integrator, that
 is most of the time. Here Python pays one call per chunk of steps. The grid is simulate_cs's,
 computed the same way (t_next = min((k + 1) h, t_end), steps t_next - t), so the results are
-those of the Python loop, bitwise (tests/python/test_cs_steps.py)."""
+those of the Python loop, bitwise (tests/package/test_cs_steps.py)."""
 
 from __future__ import annotations
 
