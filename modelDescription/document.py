@@ -79,7 +79,7 @@ def index_html(spec: dict[str, Any]) -> str:
     parameters = [v for v in variables if v["causality"] == "parameter"]
     interfaces = "model exchange"
     if "cosimulation" in spec:
-        interfaces += " and co-simulation (SUNDIALS CVODE inside fmi2DoStep)"
+        interfaces += " and co-simulation (the FMU advances itself in fmi2DoStep)"
     out = [
         "<!DOCTYPE html>",
         '<html lang="en">',

@@ -133,7 +133,7 @@ def wine_env(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
 # Where the comparison is well conditioned: the trajectory up to the first contacts. Later, every
 # contact amplifies the platforms' last-bit differences of sin, cos, exp, pow (glibc against
 # mingw-w64 / the Universal CRT): measured 1e-8 relative after 12 contacts of `csfh` at rtol
-# 1e-12, 2e-7 at 1e-10 (README, "Platforms").
+# 1e-12, 2e-7 at 1e-10 (docs/guide/platforms.md).
 CASES: list[tuple[str, str, float, float]] = [
     ("central", "LN_spheres", 1e-6, 0.3),  # the drop and two contacts
     ("central", "LN_ESDU", 1e-10, 0.3),

@@ -13,7 +13,7 @@ The coupling (the same in both engines):
     csfh.body1.theta                  -> combdrive.theta     (moment = true)
 
 Ordering. Both FMUs advance with a fixed communication step h; inputs are held constant over a
-step (zero-order hold; the csfh FMU restarts CVODE when an input changes).
+step (zero-order hold; the csfh FMU restarts its integrator when an input changes).
 
 * Jacobi (default): every FMU steps from t_k to t_k+1 with the inputs it holds at t_k; outputs are
   exchanged after all have stepped. This is libcosim's fixed-step algorithm, so the two engines
@@ -115,8 +115,9 @@ def make_trajectory(
     model = f"cosim-{s.engine}" + ("" if s.engine == "libcosimpy" else f"-{s.ordering}")
     tr = Trajectory(model=model, scene=scene.name, table=table, contacts=onsets)
     tr.stats = {
-        "integrator": f"CVODE inside the csfh FMU, rtol={s.tolerance or DEFAULT_TOLERANCE:g}"
-        f"; {s.engine} master, {s.ordering}, communication step {s.step:g} s",
+        "integrator": "the csfh FMU's own integrator (solver.method), "
+        f"rtol={s.tolerance or DEFAULT_TOLERANCE:g}; {s.engine} master, {s.ordering}, "
+        f"communication step {s.step:g} s",
         **stats,
     }
     return tr

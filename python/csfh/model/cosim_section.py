@@ -9,7 +9,7 @@ Scene section (all keys optional except the voltage ramp):
     engine = "fmpy"              # or "libcosimpy"
     step = 1e-4                  # s, communication step (libcosimpy: a whole number of ns)
     ordering = "jacobi"          # fmpy engine: "jacobi" (as libcosim) or "gauss-seidel"
-    tolerance = 1e-6             # relative tolerance of CVODE inside the csfh FMU (fmpy engine;
+    tolerance = 1e-6             # relative tolerance inside the csfh FMU (fmpy engine;
                                  # libcosim sets none, so the FMU's default 1e-6 applies)
     moment = true                # connect M -> M_ext and body1.theta -> theta
 

@@ -570,7 +570,8 @@ def simulate_cs(
     progress: Progress | None = None,
     step_loop: str | None = None,
 ) -> Trajectory:
-    """Co-simulation of the FMU (CVODE inside the FMU): one output row per communication step.
+    """Co-simulation of the FMU (its own integrator, solver.method): one output row per
+    communication step.
 
     The communication loop (fmi2DoStep, then reading the outputs and the contact events) runs in
     C, a chunk of steps per call (`csfh.runners.cs_steps`, in libcsfh_batch.so), or, with
