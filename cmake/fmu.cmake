@@ -181,8 +181,7 @@ function(csfh_add_fmu_package name)
             --source-files ${source_names}
     COMMAND Python3::Interpreter ${PROJECT_SOURCE_DIR}/modelDescription/document.py
             --version ${PROJECT_VERSION} ${variables} ${dir}/index.html
-    DEPENDS ${variables} ${PROJECT_SOURCE_DIR}/modelDescription/generate.py
-            ${PROJECT_SOURCE_DIR}/modelDescription/document.py
+    DEPENDS ${variables} ${CSFH_GENERATOR}
             ${PROJECT_SOURCE_DIR}/python/csfh/_version.py
     COMMENT "Generating the packaged modelDescription.xml and documentation of ${name}.fmu"
     VERBATIM)
@@ -233,8 +232,7 @@ function(csfh_add_fmu3_package name)
             --epoch ${CSFH_SOURCE_DATE_EPOCH}
     COMMAND Python3::Interpreter ${PROJECT_SOURCE_DIR}/modelDescription/document.py
             --version ${PROJECT_VERSION} ${variables} ${dir}/index.html
-    DEPENDS ${variables} ${PROJECT_SOURCE_DIR}/modelDescription/generate.py
-            ${PROJECT_SOURCE_DIR}/modelDescription/document.py
+    DEPENDS ${variables} ${CSFH_GENERATOR}
             ${PROJECT_SOURCE_DIR}/python/csfh/_version.py
     COMMENT "Generating the FMI 3.0 modelDescription.xml and documentation of fmi3/${name}.fmu"
     VERBATIM)
