@@ -1,13 +1,14 @@
 """The C side of a variables file: <prefix>_variables.h (value references, counts, GUID),
-<prefix>_variables.c (the table the FMI glue and the core library use) and <prefix>_enums.h
-(the enumerations as C enums)."""
+<prefix>_variables.c (the table the FMI glue and the core library use), <prefix>_enums.h
+(the enumerations as C enums) and <prefix>_constants.h (the defaults and ABI versions the
+Python side uses too; no includes, so that any library can read it)."""
 
 from __future__ import annotations
 
 import math
 import re
 
-from spec import Spec, c_ident, c_names, parse_range
+from spec import Spec, c_ident, c_names, constants, parse_range
 
 CAUSALITY_C = {
     "parameter": "CSFH_CAUS_PARAMETER",
@@ -127,4 +128,12 @@ def c_source(spec: Spec, source: str = "variables.toml") -> str:
         *(c_entry(v, struct, enums) for v in spec["variables"]),
         "};",
     ]
+    return "\n".join(lines) + "\n"
+
+
+def c_constants(spec: Spec, source: str = "variables.toml") -> str:
+    _, P, _, _ = c_names(spec)
+    lines = [banner(source), f"#ifndef {P}_CONSTANTS_H", f"#define {P}_CONSTANTS_H", ""]
+    lines += [f"#define {P}_{name} {value!r}" for name, value in constants(spec).items()]
+    lines += ["", "#endif"]
     return "\n".join(lines) + "\n"

@@ -26,8 +26,6 @@ Deps = Callable[[list[str]], str]
 LOG_EVENTS_DEFAULT = "Contact onsets and releases, mode changes"
 BASE_UNITS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
 EXPERIMENT_KEYS = ("startTime", "stopTime", "tolerance", "stepSize")
-# [default_experiment] of a spec without one
-DEFAULT_EXPERIMENT = {"startTime": 0.0, "stopTime": 1.0, "tolerance": 1e-6}
 DECLARATION = '<?xml version="1.0" encoding="UTF-8"?>\n'
 
 
@@ -426,7 +424,7 @@ def model_description(
         for e in spec["enumerations"]:
             f.enumeration(types, e)
     _log_categories(root, spec, f)
-    experiment = spec.get("default_experiment", DEFAULT_EXPERIMENT)
+    experiment = spec["default_experiment"]
     ET.SubElement(
         root,
         "DefaultExperiment",

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Generate modelDescription.xml and the C variable table from variables.toml.
+"""Generate modelDescription.xml, the C variable table and the Python module from variables.toml.
 
 variables.toml is the single source of truth of the FMU interface: value references, names,
 types, start values, ranges, units and the C storage of every variable. This script writes
@@ -8,6 +8,10 @@ types, start values, ranges, units and the C storage of every variable. This scr
     <outdir>/csfh_variables.h    (value references, enumerations, GUID)
     <outdir>/csfh_variables.c    (the table the FMI glue and the core library use)
     <outdir>/csfh_enums.h        (the enumerations as C enums)
+    <outdir>/csfh_constants.h    (the defaults and ABI versions C and Python share)
+
+and, with --python-dir, the Python module of the same interface and constants
+(python/csfh/model/_csfh_variables.py, committed: python_module.py).
 
 With --fmi-version 3 the model description is FMI 3.0's (the same variables, value references,
 start values, ranges and instantiation token; the C files are the same): the FMI 3.0 build of
@@ -25,12 +29,13 @@ Optional keys of [model] name the C side; their defaults are the csfh model's:
     c_include = "csfh_model.h"        the header that declares it
     log_events_description = "..."    description of the logEvents log category
 
-The writers: fmi_xml.py (modelDescription.xml, one writer for both FMI versions) and c_code.py
-(the C files); spec.py reads and checks the variables file. The model's `version` is the
-package's (python/csfh/_version.py, the one place of the version; CMake passes it as --version).
+The writers: fmi_xml.py (modelDescription.xml, one writer for both FMI versions), c_code.py (the
+C files) and python_module.py; spec.py reads and checks the variables file. The model's
+`version` is the package's (python/csfh/_version.py, the one place of the version; CMake passes
+it as --version).
 
-Usage: generate.py [--version X.Y.Z] [--fmi-version 2|3] VARIABLES_TOML OUTDIR
-                   [--source-files NAME ...]
+Usage: generate.py [--version X.Y.Z] [--fmi-version 2|3] VARIABLES_TOML [OUTDIR]
+                   [--source-files NAME ...] [--python-dir DIR]
 """
 
 from __future__ import annotations
@@ -40,16 +45,17 @@ import sys
 import tomllib
 from pathlib import Path
 
-from c_code import c_enums, c_header, c_source
+from c_code import c_constants, c_enums, c_header, c_source
 from fmi_xml import model_description
-from spec import SpecError, build_epoch, c_names, guid_of, load, package_version
+from python_module import module_name, python_module
+from spec import Spec, SpecError, build_epoch, c_names, guid_of, load, package_version
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--version", help="model version (default: python/csfh/_version.py)")
     ap.add_argument("variables", type=Path)
-    ap.add_argument("outdir", type=Path)
+    ap.add_argument("outdir", type=Path, nargs="?", help="where the XML and the C files go")
     ap.add_argument(
         "--epoch",
         type=int,
@@ -70,26 +76,42 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         metavar="NAME",
         help="the .c files under the FMU's sources/ (written as <SourceFiles>)",
     )
-    return ap.parse_args(argv)
+    ap.add_argument(
+        "--python-dir",
+        type=Path,
+        metavar="DIR",
+        help="write the Python module of the interface, _<prefix>_variables.py, into DIR "
+        "(the package's copy: python/csfh/model)",
+    )
+    args = ap.parse_args(argv)
+    if args.outdir is None and args.python_dir is None:
+        ap.error("give OUTDIR, --python-dir or both")
+    return args
 
 
-def generated_files(args: argparse.Namespace) -> dict[str, str]:
-    """Every file to write, by name, from the variables file (SpecError when it is wrong)."""
+def read_spec(args: argparse.Namespace) -> Spec:
+    """The variables file with the model's version (SpecError when it is wrong)."""
     spec = load(args.variables)
     if "version" in spec["model"]:
         raise SpecError("[model] version: the version comes from python/csfh/_version.py")
     spec["model"]["version"] = args.version or package_version()
-    epoch = build_epoch(args.epoch)
+    return spec
+
+
+def build_files(spec: Spec, args: argparse.Namespace) -> dict[str, str]:
+    """modelDescription.xml and the C files, by name."""
     guid = guid_of(spec)
     prefix = c_names(spec)[0]
     source = args.variables.name
+    description = model_description(
+        spec, guid, build_epoch(args.epoch), args.fmi_version, tuple(args.source_files)
+    )
     return {
-        "modelDescription.xml": model_description(
-            spec, guid, epoch, args.fmi_version, tuple(args.source_files)
-        ),
+        "modelDescription.xml": description,
         f"{prefix}_variables.h": c_header(spec, guid, source),
         f"{prefix}_enums.h": c_enums(spec, source),
         f"{prefix}_variables.c": c_source(spec, source),
+        f"{prefix}_constants.h": c_constants(spec, source),
     }
 
 
@@ -105,11 +127,15 @@ def write_changed(directory: Path, files: dict[str, str]) -> None:
 def main(argv: list[str]) -> int:
     args = parse_args(argv)
     try:
-        files = generated_files(args)
+        spec = read_spec(args)
+        if args.outdir is not None:
+            write_changed(args.outdir, build_files(spec, args))
+        if args.python_dir is not None:
+            text = python_module(spec, args.variables.name)
+            write_changed(args.python_dir, {module_name(spec): text})
     except (SpecError, KeyError, OSError, tomllib.TOMLDecodeError) as exc:
         print(f"generate.py: {args.variables}: {exc}", file=sys.stderr)
         return 1
-    write_changed(args.outdir, files)
     return 0
 
 

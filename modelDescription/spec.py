@@ -17,6 +17,9 @@ Spec = dict[str, Any]
 
 STATES_DEFAULT = "states"
 """`depends` of a variable that names none: it depends on every state."""
+NOT_IN_GUID = ("harness", "abi")
+"""Tables about the Python harness and the libraries' ABIs, not about the FMU: outside the GUID,
+which changes only with the FMU's interface."""
 VERSION_FILE = Path(__file__).resolve().parents[1] / "python" / "csfh" / "_version.py"
 
 
@@ -117,12 +120,44 @@ def _check_event_indicators(spec: Spec) -> None:
             raise SpecError(f"event indicator {name!r} is not a Real variable")
 
 
+def _check_tables(spec: Spec) -> None:
+    """[default_experiment] with a tolerance is required (the FMU's default); [harness] and
+    [abi] hold numbers under lower-case names (generated as constants)."""
+    experiment = spec.get("default_experiment")
+    if not isinstance(experiment, dict) or "tolerance" not in experiment:
+        raise SpecError("[default_experiment] with a tolerance is required")
+    for table in NOT_IN_GUID:
+        for key, value in spec.get(table, {}).items():
+            if not re.fullmatch(r"[a-z][a-z0-9_]*", key):
+                raise SpecError(f"[{table}] {key}: a key must be a lower-case identifier")
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise SpecError(f"[{table}] {key} = {value!r} is not a number")
+    for key, value in spec.get("abi", {}).items():
+        if not isinstance(value, int):
+            raise SpecError(f"[abi] {key} = {value!r} is not an integer")
+
+
+def constants(spec: Spec) -> dict[str, int | float]:
+    """The values both sides of a boundary must agree on, by the name of their constant (C adds
+    the model's prefix): [default_experiment] as DEFAULT_START_TIME ..., [harness] keys in
+    capitals, [abi] keys as NAME_ABI_VERSION."""
+    experiment = spec["default_experiment"]
+    out: dict[str, int | float] = {
+        "DEFAULT_" + re.sub(r"(?<!^)(?=[A-Z])", "_", k).upper(): float(v)
+        for k, v in experiment.items()
+    }
+    out |= {k.upper(): v for k, v in spec.get("harness", {}).items()}
+    out |= {f"{k.upper()}_ABI_VERSION": v for k, v in spec.get("abi", {}).items()}
+    return out
+
+
 def load(path: Path) -> Spec:
     """The variables file, checked (SpecError naming what is wrong)."""
     with path.open("rb") as f:
         spec = tomllib.load(f)
     _check_variables(spec)
     _check_event_indicators(spec)
+    _check_tables(spec)
     return spec
 
 
@@ -140,7 +175,9 @@ def build_epoch(given: int | None) -> int:
 
 
 def guid_of(spec: Spec) -> str:
-    digest = hashlib.sha256(repr(spec).encode()).hexdigest()
+    """A digest of the FMU's interface (the spec without the NOT_IN_GUID tables)."""
+    interface = {k: v for k, v in spec.items() if k not in NOT_IN_GUID}
+    digest = hashlib.sha256(repr(interface).encode()).hexdigest()
     return "{" + str(uuid.UUID(digest[:32])) + "}"
 
 

@@ -3,6 +3,7 @@
 #include <math.h>
 #include <stdio.h>
 
+#include "csfh_constants.h"
 #include "csfh_model.h"
 #include "csfh_variables.h"
 #include "fmu_model.h"
@@ -215,6 +216,7 @@ const fmu_model_t fmu_model = {
     .n_event_indicators = CSFH_NUMBER_OF_EVENT_INDICATORS,
     .n_variables = CSFH_NUMBER_OF_VARIABLES,
     .variables = csfh_variables,
+    .default_tolerance = CSFH_DEFAULT_TOLERANCE,
     .size = sizeof(csfh_model_t),
     .time_offset = offsetof(csfh_model_t, time),
     .x_offset = offsetof(csfh_model_t, x),

@@ -72,10 +72,6 @@ typedef void (*fmu_logger_t)(const fmu_instance_t *inst, fmu_status_t status,
 /* Any function pointer (the importer's callback, called only through its own type). */
 typedef void (*fmu_callback_t)(void);
 
-/* Relative tolerance of the co-simulation integrator when the importer defines none (also the
- * DefaultExperiment tolerance of modelDescription.xml). */
-#define FMU_DEFAULT_TOLERANCE 1e-6
-
 struct fmu_instance {
     void *model;            /* the model struct, fmu_model.size bytes */
     fmu_kind_t type;

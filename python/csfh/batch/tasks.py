@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from ..model._csfh_variables import DEFAULT_STOP_TIME, OUTPUT_INTERVAL
 from ..model.scene import Scene
 
 SCHEMA = 3  # 2: forces of the event-driven runs as interval peaks; 3: co-simulation summaries
@@ -50,8 +51,8 @@ class Task:
     scene: Scene
     model: str
     parameters: tuple[tuple[str, float], ...] = ()
-    stop_time: float = 1.0
-    output_interval: float = 1e-4
+    stop_time: float = DEFAULT_STOP_TIME
+    output_interval: float = OUTPUT_INTERVAL
     interface: str = "me"
     signals: bool = True
     meta: tuple[tuple[str, Any], ...] = field(default=(), compare=False)

@@ -28,6 +28,7 @@ from fmpy.model_description import ModelDescription
 
 from ..errors import SimulationError
 from ..model import model_info
+from ..model._csfh_variables import MAX_ME_STEPS
 from ..model.fmus import FmuLog
 from ..model.scene import MAX_OUTPUT_SAMPLES, Scene
 from ..paths import fmu_path
@@ -306,7 +307,7 @@ def simulate_me(
     parameters: dict[str, Any] | None = None,
     output_times: np.ndarray | None = None,
     progress: Progress | None = None,
-    max_steps: int = 5_000_000,
+    max_steps: int = MAX_ME_STEPS,
 ) -> Trajectory:
     """Model exchange of the FMU with contact law `law`, CVode (BDF) via fmpy, events located by
     root finding on the gap. Returns the output table (the grid k * output_interval, or the given

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ..model._csfh_variables import MOREAU_V_STICK
 from ..model.core import library
 from ..model.instance import core_model
 from ..model.scene import MAX_MOREAU_STEPS, MAX_OUTPUT_SAMPLES, Scene, load_scene
@@ -134,7 +135,7 @@ def moreau(
         h,
         STICK_RULES[rule],
         scene.integrator.v_eps if v_eps is None else v_eps,
-        1e-9,
+        MOREAU_V_STICK,
         scene.integrator.g_tol if g_tol is None else g_tol,
         0.0,
         x0.ctypes.data_as(dp),

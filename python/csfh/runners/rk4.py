@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ..model._csfh_variables import RK4_H0, RK4_TOL
 from ..model.core import library
 from ..model.instance import core_model
 from ..model.scene import Scene
@@ -39,8 +40,8 @@ def rk4_event(
     scene: Scene,
     law: str,
     *,
-    h0: float = 2e-4,
-    tol: float = 1e-4,
+    h0: float = RK4_H0,
+    tol: float = RK4_TOL,
     h_min: float | None = None,
     output_interval: float | None = None,
     stop_time: float | None = None,
