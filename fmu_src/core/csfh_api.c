@@ -4,13 +4,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "csfh_constants.h"
 #include "csfh_variables.h"
-
-#define CSFH_ABI_VERSION 2 /* 2: csfh_api_moreau_batch (csfh_moreau_batch.h) */
 
 int csfh_api_abi_version(void)
 {
-    return CSFH_ABI_VERSION;
+    return CSFH_CORE_ABI_VERSION; /* [abi] of variables.toml, as csfh.model.core expects */
 }
 
 size_t csfh_api_model_size(void)

@@ -13,8 +13,8 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..paths import core_library_path
+from ._csfh_variables import CORE_ABI_VERSION as ABI_VERSION
 
-ABI_VERSION = 2  # 2: csfh_api_moreau_batch (moreau_batch.py)
 _MSG = 512
 _dp = POINTER(c_double)
 

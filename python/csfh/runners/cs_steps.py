@@ -24,6 +24,7 @@ import numpy as np
 from fmpy.fmi1 import FMICallException
 
 from .. import paths
+from ..model._csfh_variables import BATCH_ABI_VERSION as ABI_VERSION
 
 _CALLS = ("fmi2DoStep", "fmi2GetReal", "fmi2GetInteger", "fmi2GetBoolean")
 """The calls csfh_cs_steps reports as failed (CSFH_STEPS_DO_STEP .. _GET_BOOLEAN)."""
@@ -45,10 +46,6 @@ class _Loop(Structure):
         ("n_boolean", c_size_t),
         ("boolean_vr", POINTER(c_uint)),
     ]
-
-
-ABI_VERSION = 2  # 2: csfh_cs_steps
-"""The version of the batch library's interface this package needs (csfh_cs_batch.h)."""
 
 
 @cache
