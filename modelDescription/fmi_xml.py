@@ -16,7 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from spec import Spec, SpecError, dependencies, parse_range, states
+from spec import Spec, SpecError, dependencies, parse_range, quantity_of, states
 
 Variable = dict[str, Any]
 Ref = Callable[[str], int]
@@ -41,15 +41,15 @@ def boolean(x: object) -> str:
 # what the versions share
 
 
-def type_attributes(v: Variable, units: dict[str, Any], derivative: str | None) -> dict[str, str]:
+def type_attributes(v: Variable, spec: Spec, derivative: str | None) -> dict[str, str]:
     """The attributes of a variable's type, the same in FMI 2.0 (on its type element) and FMI 3.0
     (on the variable): declaredType, quantity, unit, displayUnit, min, max, nominal, derivative
     (the reference the caller gives: FMI 2.0's index, FMI 3.0's value reference), start."""
     ta: dict[str, str] = {}
     if v["type"] == "Enumeration":
         ta["declaredType"] = v["declaredType"]
-    quantity = v.get("quantity", units.get(v.get("unit", ""), {}).get("quantity"))
-    if quantity and v["type"] == "Real":
+    quantity = quantity_of(spec, v)
+    if quantity:
         ta["quantity"] = quantity
     for key in ("unit", "displayUnit"):
         if key in v:
@@ -158,7 +158,7 @@ class Flavour:
     cosimulation: Callable[[Spec], dict[str, str]]
     source_files: bool  # FMI 2.0 lists them in the interfaces; FMI 3.0 in buildDescription.xml
     enumeration: Callable[[ET.Element, dict[str, Any]], None]
-    variable: Callable[[ET.Element, int, Variable, str | None, dict[str, Any]], None]
+    variable: Callable[[ET.Element, int, Variable, str | None, Spec], None]
     reference: Callable[[Spec], dict[str, int]]  # variable name -> how FMI refers to it
     structure: Callable[[ET.Element, list[Unknown], Deps, Ref], None]
 
@@ -193,11 +193,11 @@ def _variable_attributes(v: Variable) -> dict[str, str]:
 
 
 def _variable2(
-    parent: ET.Element, index: int, v: Variable, derivative: str | None, units: dict[str, Any]
+    parent: ET.Element, index: int, v: Variable, derivative: str | None, spec: Spec
 ) -> None:
     parent.append(ET.Comment(f" index {index} "))
     scalar = ET.SubElement(parent, "ScalarVariable", _variable_attributes(v))
-    ET.SubElement(scalar, v["type"], type_attributes(v, units, derivative))
+    ET.SubElement(scalar, v["type"], type_attributes(v, spec, derivative))
 
 
 FMI3_TYPE = {
@@ -209,9 +209,9 @@ FMI3_TYPE = {
 
 
 def _variable3(
-    parent: ET.Element, index: int, v: Variable, derivative: str | None, units: dict[str, Any]
+    parent: ET.Element, index: int, v: Variable, derivative: str | None, spec: Spec
 ) -> None:
-    attrs = _variable_attributes(v) | type_attributes(v, units, derivative)
+    attrs = _variable_attributes(v) | type_attributes(v, spec, derivative)
     ET.SubElement(parent, FMI3_TYPE[v["type"]], attrs)
 
 
@@ -400,11 +400,10 @@ def _log_categories(root: ET.Element, spec: Spec, f: Flavour) -> None:
 
 
 def _variables(root: ET.Element, spec: Spec, f: Flavour, ref: dict[str, int]) -> None:
-    units = {u["name"]: u for u in spec.get("units", [])}
     element = ET.SubElement(root, "ModelVariables")
     for i, v in enumerate(spec["variables"], start=1):
         derivative = str(ref[v["derivative_of"]]) if "derivative_of" in v else None
-        f.variable(element, i, v, derivative, units)
+        f.variable(element, i, v, derivative, spec)
 
 
 def model_description(

@@ -64,6 +64,14 @@ def dependencies(spec: Spec, v: dict[str, Any]) -> list[str]:
     return states(spec) if d == STATES_DEFAULT else list(d)
 
 
+def quantity_of(spec: Spec, v: dict[str, Any]) -> str | None:
+    """A Real's physical quantity: its own, else its unit's ([[units]] quantity)."""
+    if v["type"] != "Real":
+        return None
+    units = {u["name"]: u for u in spec.get("units", [])}
+    return v.get("quantity", units.get(v.get("unit", ""), {}).get("quantity"))
+
+
 def _check_variable(v: dict[str, Any], enums: dict[str, Any], units: dict[str, Any]) -> None:
     name = v["name"]
     if v["type"] == "Enumeration" and v.get("declaredType") not in enums:

@@ -4,10 +4,12 @@ generator writes today, and the C and Python sides of every shared constant agre
 from __future__ import annotations
 
 import importlib
+import math
 import re
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -66,3 +68,92 @@ def test_libraries_report_the_generated_abi_versions() -> None:
 
     assert core.library().csfh_api_abi_version() == generated.CORE_ABI_VERSION
     assert cs_steps.library().csfh_cs_batch_abi_version() == generated.BATCH_ABI_VERSION
+
+
+# ---------------------------------------------------------------------------------------------
+# the interface module against the built FMU's modelDescription.xml
+
+
+def _xml_bounds(v: Any) -> tuple[float | None, float | None]:
+    """The range of the module's variable as modelDescription.xml writes it (inclusive: an open
+    end is the next value inside)."""
+    r = v.range
+    if r is None:
+        return None, None
+    step = 1 if v.type == "Integer" else None
+
+    def end(x: float, is_open: bool, inward: float) -> float | None:
+        if math.isinf(x):
+            return None
+        if not is_open:
+            return x
+        return x + inward * step if step else math.nextafter(x, inward * math.inf)
+
+    return end(r.low, r.low_open, 1.0), end(r.high, r.high_open, -1.0)
+
+
+def _number(text: str | None) -> float | None:
+    return None if text is None else float(text)
+
+
+@pytest.mark.parametrize("model", ["csfh", "combdrive"])
+def test_interface_module_is_the_fmus_model_description(model: str) -> None:
+    """Every variable of the generated module as the built FMU declares it: value reference,
+    type, causality, variability, initial, start, declared type, quantity, unit, display unit,
+    nominal, min and max, description; the states; the enumerations' items."""
+    from fmpy import read_model_description
+
+    from csfh import paths
+
+    path = paths.fmu_path() if model == "csfh" else paths.combdrive_fmu_path()
+    md = read_model_description(str(path))
+    interface = importlib.import_module(f"csfh.model._{model}_variables").INTERFACE
+    assert [v.name for v in md.modelVariables] == [v.name for v in interface.variables]
+    for xml, v in zip(md.modelVariables, interface.variables, strict=True):
+        start = (
+            None if v.start is None else str(v.start).lower() if v.type == "Boolean" else v.start
+        )
+        expected = {
+            "valueReference": v.valueReference,
+            "type": v.type,
+            "causality": v.causality,
+            "variability": v.variability,
+            "initial": v.initial or xml.initial,  # None: FMI's default, as fmpy fills it in
+            "declaredType": v.declaredType,
+            "quantity": v.quantity,
+            "unit": v.unit,
+            "displayUnit": v.displayUnit,
+            "description": v.description or None,
+            "min_max": _xml_bounds(v),
+        }
+        declared = xml.declaredType.name if xml.declaredType is not None else None
+        actual = {
+            "valueReference": xml.valueReference,
+            "type": xml.type,
+            "causality": xml.causality,
+            "variability": xml.variability,
+            "initial": xml.initial,
+            "declaredType": declared,
+            "quantity": xml.quantity,
+            "unit": xml.unit,
+            "displayUnit": xml.displayUnit,
+            "description": xml.description,
+            "min_max": (_number(xml.min), _number(xml.max)),
+        }
+        assert actual == expected, v.name
+        assert _number(xml.nominal) == v.nominal, v.name
+        if start is None:
+            assert xml.start is None, v.name
+        elif v.type == "Boolean":
+            assert xml.start == start, v.name
+        else:
+            assert float(xml.start) == start, v.name
+    states = [d.variable.derivative.name for d in md.derivatives]
+    assert states == [v.name for v in interface.states]
+    for t in md.typeDefinitions:
+        items = [(i.name, int(i.value), i.description) for i in t.items]
+        expected_items = [
+            (i.name, i.value, i.description) for i in interface.enumeration(t.name).items
+        ]
+        assert items == expected_items
+    assert len(md.typeDefinitions) == len(interface.enumerations)
