@@ -40,27 +40,6 @@ csfh_model_t *csfh_api_clone(const csfh_model_t *m)
     return c;
 }
 
-int csfh_api_variable_count(void)
-{
-    return CSFH_NUMBER_OF_VARIABLES;
-}
-
-const char *csfh_api_variable_name(int index)
-{
-    return index >= 0 && index < CSFH_NUMBER_OF_VARIABLES ? csfh_variables[index].name : NULL;
-}
-
-int csfh_api_variable_type(int index)
-{
-    return index >= 0 && index < CSFH_NUMBER_OF_VARIABLES ? (int)csfh_variables[index].type : -1;
-}
-
-int csfh_api_variable_causality(int index)
-{
-    return index >= 0 && index < CSFH_NUMBER_OF_VARIABLES ? (int)csfh_variables[index].causality
-                                                          : -1;
-}
-
 int csfh_api_set(csfh_model_t *m, const char *name, double value, char *msg, size_t msg_size)
 {
     const csfh_variable_t *v = csfh_variable_by_name(name);

@@ -129,17 +129,7 @@ def parse_cosim(table: dict[str, Any], inputs: dict[str, float] | None = None) -
     moment = table.get("moment", True)
     if not isinstance(moment, bool):
         raise SceneError(f"cosim.moment = {moment!r} must be true or false")
-    if "voltage" not in table:
-        raise SceneError("[cosim.voltage] is missing (keys V0, V1, t0, t1)")
-    ramp = _keys("[cosim.voltage]", table["voltage"], _RAMP_KEYS)
-    missing = sorted(_RAMP_KEYS - set(ramp))
-    if missing:
-        raise SceneError(f"[cosim.voltage]: key {missing[0]!r} is missing (V0, V1, t0, t1)")
-    v = {k: _number(f"cosim.voltage.{k}", ramp[k]) for k in ("V0", "V1", "t0", "t1")}
-    if v["t0"] < 0:
-        raise SceneError(f"cosim.voltage.t0 = {v['t0']} must be >= 0")
-    if not v["t1"] > v["t0"]:
-        raise SceneError(f"cosim.voltage.t1 = {v['t1']} must be greater than t0 = {v['t0']}")
+    voltage = _voltage(table)
     actuator = check_actuator(
         dict(_keys("[cosim.actuator]", table.get("actuator", {}), set(actuator_parameters())))
     )
@@ -156,10 +146,26 @@ def parse_cosim(table: dict[str, Any], inputs: dict[str, float] | None = None) -
         tolerance=tolerance,
         moment=moment,
         actuator=actuator,
-        voltage=VoltageRamp(**v),
+        voltage=voltage,
     )
     check_engine(settings)
     return settings
+
+
+def _voltage(table: dict[str, Any]) -> VoltageRamp:
+    """[cosim.voltage]: every key given, t1 > t0 >= 0."""
+    if "voltage" not in table:
+        raise SceneError("[cosim.voltage] is missing (keys V0, V1, t0, t1)")
+    ramp = _keys("[cosim.voltage]", table["voltage"], _RAMP_KEYS)
+    missing = sorted(_RAMP_KEYS - set(ramp))
+    if missing:
+        raise SceneError(f"[cosim.voltage]: key {missing[0]!r} is missing (V0, V1, t0, t1)")
+    v = {k: _number(f"cosim.voltage.{k}", ramp[k]) for k in ("V0", "V1", "t0", "t1")}
+    if v["t0"] < 0:
+        raise SceneError(f"cosim.voltage.t0 = {v['t0']} must be >= 0")
+    if not v["t1"] > v["t0"]:
+        raise SceneError(f"cosim.voltage.t1 = {v['t1']} must be greater than t0 = {v['t0']}")
+    return VoltageRamp(**v)
 
 
 def check_engine(s: CosimSettings) -> None:

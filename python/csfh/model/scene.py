@@ -17,7 +17,13 @@ of modelDescription/variables.toml, as the constants of this module):
 * the initial state: speeds ``|vx|``, ``|vy|`` <= 100 m/s and ``|omega|`` <= 1000 rad/s (the
   contact laws are quasi-static: they hold for impact speeds far below these), ``|theta|`` <= pi,
   and a start in contact at most as deep as ``contact.max_initial_indentation`` (the FMU's
-  check) and 1 % of ``contact.R1`` (Hertz contact assumes indentations small against the radii).
+  check) and 1 % of ``contact.R1`` (Hertz contact assumes indentations small against the radii);
+* every parameter and input as the FMU checks it (names, types, ranges, enumeration items: the
+  generated interface, csfh.model.model_info), and the model's own checks (R1 < R2, v0 < v1,
+  derived quantities finite) and the start's depth in the C core where it is built. Loading
+  needs no binary; without the core, the FMU and the core make the model's checks and the
+  contact.max_initial_indentation check when a run sets the model up, and only the 1 % of
+  ``contact.R1`` limit is not checked.
 
     name = "csfh"
     description = "..."
@@ -61,7 +67,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from ..errors import SceneError
+from ..errors import ParameterError, SceneError
 from . import model_info
 from ._csfh_variables import (
     DEFAULT_STOP_TIME,
@@ -275,6 +281,7 @@ def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
     )
     _check_initial(scene)
     _check_values(scene)
+    _check_model(scene)
     return scene
 
 
@@ -408,10 +415,27 @@ def _check_initial(scene: Scene) -> None:
 
 
 def _check_values(scene: Scene) -> None:
-    """Run the model's own validation (ranges, R1 < R2, v0 < v1, ...) on the scene's values."""
-    from .core import CoreModel, ParameterError
+    """Every value the scene sets, as the FMU checks it (its range, an enumeration's items), from
+    the generated interface: no binary needed."""
+    for table, values in (("parameters", scene.parameter_values()), ("inputs", scene.inputs)):
+        for name, value in values.items():
+            try:
+                model_info.check(name, value)
+            except ParameterError as exc:
+                raise SceneError(f"{table}: {exc}") from None
 
-    model = CoreModel()
+
+def _check_model(scene: Scene) -> None:
+    """The model's own checks in the C core: R1 < R2, v0 < v1, the derived quantities finite, how
+    deep the start is in the bore. Without a built core (a source checkout with no build) they
+    wait for the run, where the FMU and the core make the same checks (but for the harness's
+    limit of 1 % of contact.R1)."""
+    from .core import CoreModel
+
+    try:
+        model = CoreModel()
+    except FileNotFoundError:
+        return
     try:
         for name, value in scene.parameter_values().items():
             model.set(name, value)

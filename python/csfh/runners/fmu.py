@@ -37,7 +37,7 @@ from ..trajectory import CONTACT_FIELDS, Trajectory
 from . import cs_steps
 from .direct_calls import DirectCalls
 
-STATE_NAMES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
+STATE_NAMES = model_info.STATE_NAMES
 OUTPUT_NAMES = {  # table column -> FMU variable
     "x": "body1.x",
     "y": "body1.y",
@@ -69,6 +69,8 @@ CS_OUTPUT_NAMES = {  # co-simulation only: the peaks over each communication ste
 each row (located on CVODE's interpolant; at t = 0 the values there), the flexure stress and its
 peak (tracked inside the step only with flexure.track_stress_peak), the Hertz pressure and its
 peak, and the frame's acceleration (a_base plus the shock pulse)."""
+model_info.require(OUTPUT_NAMES.values(), "runners.fmu.OUTPUT_NAMES")
+model_info.require(CS_OUTPUT_NAMES.values(), "runners.fmu.CS_OUTPUT_NAMES")
 
 
 @cache
@@ -554,7 +556,7 @@ def cs_method_name(scene: Scene, parameters: dict[str, Any] | None = None) -> st
     """The co-simulation method a run uses (solver.method: from the overrides, the scene, or the
     FMU's start value)."""
     values = {**scene.parameter_values(), **(parameters or {})}
-    start = int(model_info.variables()["solver.method"].start)  # the XML holds a string
+    start = model_info.variables()["solver.method"].start
     value = model_info.coerce("solver.method", values.get("solver.method", start))
     names = {v: k for k, v in model_info.enumeration("SolverMethod").items()}
     return names.get(int(value), str(value))
