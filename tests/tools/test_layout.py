@@ -20,6 +20,7 @@ LAYERS: dict[str, int] = {
     "csfh.paths": 0,
     "csfh.output": 0,
     "csfh.progress": 0,
+    "csfh.scenes": 0,
     "csfh.trajectory": 1,
     "csfh.plotting": 1,
     "csfh.model": 2,

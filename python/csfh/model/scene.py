@@ -68,6 +68,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ParameterError, SceneError
+from ..scenes import BUILTIN_SCENES
 from . import model_info
 from ._csfh_variables import (
     DEFAULT_STOP_TIME,
@@ -83,7 +84,6 @@ from ._csfh_variables import (
 from .cosim_section import parse_cosim
 from .presets import PRESETS
 
-BUILTIN_SCENES = ("central", "asymmetric", "csfh", "mems", "combdrive")  # combdrive: `csfh cosim`
 STICK_RULES = ("paper", "memory")
 
 # the limits of a scene (module docstring); MAX_STOP_TIME (s, the longest run),
@@ -462,8 +462,8 @@ def _check_model(scene: Scene) -> None:
 
 
 def load_scene(scene: str | Path) -> Scene:
-    """A built-in scene by name (``central``, ``asymmetric``, ``csfh``, ``mems``, ``combdrive``) or
-    a scene file by path. Raises :class:`SceneError` with a one-line message naming the file, the
+    """A built-in scene by name (csfh.scenes.BUILTIN_SCENES: ``central``, ``csfh``, ...) or a
+    scene file by path. Raises :class:`SceneError` with a one-line message naming the file, the
     key and the value when the scene cannot be used."""
     path = Path(scene)
     if path.suffix == ".toml" or path.exists():
