@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..model._csfh_variables import MOREAU_V_STICK
-from ..model.core import library
+from ..model.core import N_STATES, library
 from ..model.instance import core_model
 from ..model.scene import MAX_MOREAU_STEPS, MAX_OUTPUT_SAMPLES, Scene, load_scene
 from ..trajectory import Trajectory
@@ -124,7 +124,7 @@ def moreau(
     assert ncols == len(_RECORD) and icols == len(_IMPACT), "core library and harness disagree"
     records = np.zeros((max_records, ncols))
     impacts = np.zeros((max_impacts, icols))
-    x_end = np.zeros(6)
+    x_end = np.zeros(N_STATES)
     stats = (ctypes.c_longlong * len(_STATS))()
     model = core_model(scene, parameters)
     x0 = np.array(scene.x0, dtype=float)

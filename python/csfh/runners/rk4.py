@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..model._csfh_variables import RK4_H0, RK4_TOL
-from ..model.core import library
+from ..model.core import N_STATES, library
 from ..model.instance import core_model
 from ..model.scene import Scene
 from ..trajectory import CONTACT_FIELDS, Trajectory
@@ -62,7 +62,7 @@ def rk4_event(
     records = np.zeros((max_records, len(_RECORD)))
     contacts = np.zeros((max_contacts, len(CONTACT_FIELDS)))
     x0 = np.array(scene.x0, dtype=float)
-    x_end = np.zeros(6)
+    x_end = np.zeros(N_STATES)
     stats = (ctypes.c_longlong * len(_STATS))()
     dp = ctypes.POINTER(ctypes.c_double)
     wall = time.perf_counter()
