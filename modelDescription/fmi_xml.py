@@ -382,7 +382,7 @@ def _units(root: ET.Element, spec: Spec) -> None:
         unit = ET.SubElement(definitions, "Unit", name=u["name"])
         base = {k: str(u[k]) for k in BASE_UNITS if k in u}
         displays = u.get("display", [])
-        if base or (displays and u["name"] == "1"):
+        if base or (displays and u["name"] == "1"):  # "1": every exponent 0
             ET.SubElement(unit, "BaseUnit", base)
         for d in displays:
             ET.SubElement(unit, "DisplayUnit", name=d["name"], factor=repr(d["factor"]))
