@@ -1,5 +1,5 @@
 """The Python side of a variables file: python/csfh/model/_<prefix>_variables.py, committed and
-checked by tests/python/test_generated.py (regenerating gives the same bytes), so that the
+checked by tests/tools/test_generated.py (regenerating gives the same bytes), so that the
 package knows the FMU's interface and its defaults without a built binary.
 
 The module holds INTERFACE (csfh.model.interface.Interface: every variable on one line, the
