@@ -4,8 +4,9 @@ law (LN_spheres), same relative tolerance, same output grid; every ratio is meas
 (medians of repeats, the variants interleaved). Target: CS >= 10x faster.
 
 A. Complete runs with the harness drivers (instantiate, set the scene, simulate, free):
-   ME: csfh.runners.fmu.simulate_me (one CVode step at a time, dense output onto the grid)
-   CS: csfh.runners.fmu.simulate_cs (one fmi2DoStep per grid point, the loop in C)
+   ME: csfh.runners.model_exchange.simulate_me (one CVode step at a time, dense output onto the
+       grid)
+   CS: csfh.runners.co_simulation.simulate_cs (one fmi2DoStep per grid point, the loop in C)
    and fmpy's own two drivers, fmpy.simulate_fmu with fmi_type ModelExchange / CoSimulation.
 B. The simulation loop alone, after initialization (what differs between the interfaces; the
    FMU loading and the parameter setting cost the same in both): fmpy's CVodeSolver stepping the
@@ -14,10 +15,10 @@ B. The simulation loop alone, after initialization (what differs between the int
    co-simulation methods (solver.method: auto, the default, RK45 while not stiff and BDF where
    stiff; BDF, as fmpy's CVode; Adams; RK45 alone). Both
    read the six states at every grid point, ME with a direct fmi2GetReal call
-   (csfh.direct_calls, ~1 us per call). The CS loop runs as csfh.simulate_cs runs it: in C, a
-   chunk of communication steps per ctypes call (csfh.runners.cs_steps), on the instance fmpy
-   created. The column "auto, Python loop" is the CS loop in Python with one direct ctypes call
-   per fmi2DoStep and per read (simulate_cs's loop before, ~1 us per call); "auto, fmpy calls"
+   (benchmarks/direct_calls.py, ~1 us per call). The CS loop runs as csfh.simulate_cs runs it:
+   in C, a chunk of communication steps per ctypes call (csfh.runners.cs_steps), here on the
+   instance fmpy created. The column "auto, Python loop" is the CS loop in Python with one
+   direct ctypes call per fmi2DoStep and per read (~1 us per call); "auto, fmpy calls"
    the same through fmpy's FMU2Slave methods, whose Python cost per call (~6-9 us) dominates on
    a fine grid; the column "auto, C master" is
    the same loop in a compiled master (benchmarks/master/bench_cs_master.c, built as
@@ -43,13 +44,15 @@ import c_master
 import fmpy
 import numpy as np
 from c_master import default_master, run_c_master
+from direct_calls import DirectCalls
 
 from csfh import load_scene
 from csfh.model import model_info
 from csfh.model.scene import Scene
+from csfh.runners.co_simulation import chunk_size, simulate_cs
 from csfh.runners.cs_steps import CSteps
-from csfh.runners.direct_calls import DirectCalls
-from csfh.runners.fmu import STATE_NAMES, chunk_size, simulate_cs, simulate_me
+from csfh.runners.fmu import STATE_NAMES
+from csfh.runners.model_exchange import simulate_me
 
 LAW = "LN_spheres"
 METHODS = {"auto": 1, "BDF": 2, "Adams": 3, "RK45": 4}  # solver.method (enumeration SolverMethod)
@@ -159,15 +162,14 @@ class Loops:
     def run_cs(self, rtol: float, dt: float, method: int = 1, loop: str = "c") -> tuple[float, int]:
         """The CS loop reading the six states at every grid point: loop "c" as simulate_cs runs
         it (csfh.runners.cs_steps: in C, a chunk of steps per ctypes call), "python" (one direct
-        ctypes call per fmi2DoStep and per read, simulate_cs's loop before), "fmpy" (fmpy's
-        FMU2Slave methods)."""
+        ctypes call per fmi2DoStep and per read), "fmpy" (fmpy's FMU2Slave methods)."""
         cs = self.cs
         cs.reset()
         _setup(cs, self.scene, rtol, {"solver.method": method})
         n = round(self.scene.stop_time / dt)
         direct = DirectCalls(cs)
         do_step, read_states = direct.do_step, direct.real_reader(self.refs)
-        steps = CSteps(cs, dt, self.scene.stop_time, self.refs)
+        steps = CSteps(direct, dt, self.scene.stop_time, self.refs)
         size = chunk_size(n)
         t0 = time.perf_counter()
         if loop == "fmpy":

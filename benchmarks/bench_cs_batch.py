@@ -7,7 +7,7 @@ a different sample of the file's tolerances (contact radii, flexure height, radi
 
 * per run, model exchange: `csfh.batch.tasks.run_chunk` on one task at a time with interface "me"
   (the default of `csfh tolerance` and `csfh sweep`): fmpy's CVode stepped from Python.
-* per run, co-simulation: the per-run function of the task system (`csfh.batch.tasks._run_fmu`)
+* per run, co-simulation: the per-run function of the task system (`csfh.batch.tasks.run_alone`)
   with interface "cs", one task at a time (fmpy's FMU2Slave, fmi2DoStep per grid point from
   Python): the path of `--interface cs` before the batch master.
 * batched, inside the call: `csfh.runners.cs_batch` with all the samples in one call into
@@ -41,7 +41,7 @@ def main() -> None:
     args = parser.parse_args()
     from csfh.batch.executors import run_tasks
     from csfh.batch.store import ResultStore
-    from csfh.batch.tasks import Task, _run_fmu, run_chunk
+    from csfh.batch.tasks import Task, run_alone, run_chunk
     from csfh.runners.cs_batch import cs_batch
     from csfh.studies.tolerance.study import load_study, sample
 
@@ -79,7 +79,7 @@ def main() -> None:
     me = tasks("me", n_me)
     cs = tasks("cs", n_cs)
     rate_me = best_rate(lambda: [run_chunk([t]) for t in me], n_me, repeats=1)
-    rate_cs = best_rate(lambda: [_run_fmu(t) for t in cs], n_cs)
+    rate_cs = best_rate(lambda: [run_alone(t) for t in cs], n_cs)
     # warm: load the batch library and unzip the FMU once (as any long study does)
     cs_batch(scene, law, samples[:2], stop_time=stop, communication_step=grid)
     in_call = 0.0

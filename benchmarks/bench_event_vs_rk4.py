@@ -17,11 +17,7 @@ CS wall time from Python is simulate_cs's stats["do_step_time"] on a 10 ms commu
 communication loop, which runs in C (csfh.runners.cs_steps: fmi2DoStep and the reads of the
 outputs and contact events, all 42 steps in one ctypes call) and includes creating the
 integrator at the first step of the fresh instance; RK4 runs entirely in C, in one call, writing
-a record every 1e-4 s as the harness runs it. The column "Py loop" is the same run with
-simulate_cs's loop in Python (step_loop="python": one ctypes call per FMI call, the time of the
-fmi2DoStep calls alone, the reads not included), as before: each fmi2DoStep from Python costs
-about 1 us more than the same call from C (the ctypes call, and the FMU's code and data are no
-longer in the caches after the interpreter's work between calls). The matched CS run is timed
+a record every 1e-4 s as the harness runs it. The matched CS run is timed
 also in the compiled master (master/bench_cs_master.c, built as build/bench_cs_master; its loop
 on a re-used instance after a warm-up run, reading the six states, the same 10 ms grid): the
 wall time a C/C++ importer pays.
@@ -41,7 +37,8 @@ from pathlib import Path
 from c_master import default_master, run_c_master
 
 from csfh import load_scene
-from csfh.runners.fmu import simulate_cs, simulate_me
+from csfh.runners.co_simulation import simulate_cs
+from csfh.runners.model_exchange import simulate_me
 from csfh.runners.rk4 import rk4_event
 from csfh.studies.accuracy.metrics import contact_errors
 
@@ -85,8 +82,7 @@ def main() -> None:
     header = (
         f"{'model':<13} {'RK4 h0, tol':<16} {'error [s]':>9} {'RHS':>8} {'wall':>9} | "
         f"{'CS rtol':>7} {'error [s]':>9} {'RHS':>6} {'wall':>9} | "
-        f"{'RHS ratio':>9} {'wall ratio':>10} | {'Py loop':>9} {'wall ratio':>10} | "
-        f"{'C master':>9} {'wall ratio':>10}"
+        f"{'RHS ratio':>9} {'wall ratio':>10} | {'C master':>9} {'wall ratio':>10}"
     )
     print(header)
     print("-" * len(header))
@@ -111,18 +107,13 @@ def main() -> None:
                 print(line + f"{wall:9.2e} | no CS run reaches this error")
                 continue
             rtol, cerr, crhs = min(ok, key=lambda c: c[2])
-            walls: dict[str, list[float]] = {"rk4": [], "cs": [], "py": [], "c": []}
+            walls: dict[str, list[float]] = {"rk4": [], "cs": [], "c": []}
             for _ in range(args.repeats):  # in turns: the same machine state for all three
                 walls["rk4"].append(rk4_event(scene, model, h0=h0, tol=tol).stats["wall_time"])
                 walls["cs"].append(
                     simulate_cs(scene, model, rtol=rtol, communication_step=1e-2).stats[
                         "do_step_time"
                     ]
-                )
-                walls["py"].append(
-                    simulate_cs(
-                        scene, model, rtol=rtol, communication_step=1e-2, step_loop="python"
-                    ).stats["do_step_time"]
                 )
                 if master is not None:
                     walls["c"].append(
@@ -131,12 +122,11 @@ def main() -> None:
                         ).loop_seconds
                     )
             wall, cwall = statistics.median(walls["rk4"]), statistics.median(walls["cs"])
-            py_wall = statistics.median(walls["py"])
             c_wall = statistics.median(walls["c"]) if walls["c"] else math.nan
             print(
                 line + f"{wall:9.2e} | {rtol:7.0e} {cerr:9.2e} {crhs:6d} {cwall:9.2e} | "
                 f"{rk4_rhs / crhs:9.1f} {wall / cwall:10.2f} | "
-                f"{py_wall:9.2e} {wall / py_wall:10.2f} | {c_wall:9.2e} {wall / c_wall:10.2f}"
+                f"{c_wall:9.2e} {wall / c_wall:10.2f}"
             )
     print("\ntargets: RHS ratio >= 10; wall ratio >= 5 from Python, >= 10 from the C master")
 

@@ -42,6 +42,8 @@ from typing import Any
 
 import numpy as np
 
+from .errors import ResultsError, file_errors
+
 CSV_DIGITS = 10
 """Significant digits of the numbers in a CSV table."""
 _HEADER_FIELD = re.compile(r"^\s*(?P<name>[^\[\]]+?)\s*(?:\[(?P<unit>[^\[\]]*)\])?\s*$")
@@ -68,15 +70,16 @@ def _fsync_directory(directory: Path) -> None:
 def replace_file(path: Path, data: bytes) -> Path:
     """Write `data` to `path` whole or not at all: into a temporary file beside it (a hidden
     name), fsync'ed, then renamed over `path`. On any error or interrupt the temporary file is
-    removed and `path` is as it was."""
+    removed and `path` is as it was. A file system error is a ResultsError naming `path`."""
     path = Path(path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
     try:
-        with open(tmp, "wb") as fh:
+        with file_errors(path), open(tmp, "wb") as fh:
             fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, path)
+        with file_errors(path):
+            os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
@@ -272,15 +275,18 @@ def output_set(directory: Path, name: str, *, merge: bool = False) -> Iterator[O
     docstring): every file the writers of this module write into `directory` inside the block
     is staged, and committed when the block ends without an error. `merge=True` keeps the
     previous run's other files in the set (``csfh plot`` redraws the figures of a comparison).
-    Two commands on the same set wait for each other (a lock)."""
+    Two commands on the same set wait for each other (a lock). A file system error is a
+    ResultsError naming the file."""
     out = OutputSet(directory, name, merge)
-    out.state.mkdir(parents=True, exist_ok=True)
-    with _lock(out.state / f"{name}.lock"):
+    with file_errors(out.directory, "is not a usable output directory"):
+        out.state.mkdir(parents=True, exist_ok=True)
+    with file_errors(out.state / f"{name}.lock"), _lock(out.state / f"{name}.lock"):
         _settle(out.directory, name)
         token = _ACTIVE.set((*_ACTIVE.get(), out))
         try:
             yield out
-            out.commit()
+            with file_errors(out.directory):
+                out.commit()
         finally:
             _ACTIVE.reset(token)
             if not out.journal_path.exists():  # else a commit began: the next opener ends it
@@ -310,7 +316,7 @@ def read_manifest(directory: Path, name: str) -> dict[str, Any] | None:
 
 def check_set(directory: Path, name: str, files: list[str], command: str) -> None:
     """Check that `files` (relative to `directory`) are still the files the last run of set
-    `name` wrote: ValueError naming the first that is not (changed, or missing although the set
+    `name` wrote: ResultsError naming the first that is not (changed, or missing although the set
     lists it). A set written before manifests existed is not checked. A commit left half done by
     a killed process is completed first (if the directory is writable)."""
     directory = Path(os.path.abspath(directory))
@@ -320,8 +326,9 @@ def check_set(directory: Path, name: str, files: list[str], command: str) -> Non
             with _lock(state / f"{name}.lock"):
                 _settle(directory, name)
         except OSError as exc:
-            raise ValueError(
-                f"{directory}: an interrupted write of {command} cannot be completed ({exc})"
+            reason = exc.strerror or exc
+            raise ResultsError(
+                f"{directory}: an interrupted write of {command} cannot be completed ({reason})"
             ) from None
     manifest = read_manifest(directory, name)
     if manifest is None:
@@ -331,7 +338,7 @@ def check_set(directory: Path, name: str, files: list[str], command: str) -> Non
         if info is None:
             continue
         if _sha256_file(directory / rel) != info.get("sha256"):
-            raise ValueError(
+            raise ResultsError(
                 f"{directory / rel}: not the file that {command} wrote with the others "
                 f"(changed since, by another command or by hand): run {command} again"
             )
@@ -369,32 +376,37 @@ def write_table(
 
 
 def read_table(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    """The columns and units of a CSV table that `write_table` wrote. Raises ValueError naming
+    """The columns and units of a CSV table that `write_table` wrote. Raises ResultsError naming
     the file for anything else."""
     path = Path(path)
-    with open(path, encoding="utf-8") as fh:
-        header = fh.readline().rstrip("\r\n")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            header = fh.readline().rstrip("\r\n")
+    except UnicodeDecodeError:
+        raise ResultsError(f"{path}: not UTF-8 text, not a csfh table") from None
+    except OSError as exc:
+        raise ResultsError(f"{path}: cannot be read ({exc.strerror or exc})") from None
     if not header:
-        raise ValueError(f"{path}: empty file, not a csfh table")
+        raise ResultsError(f"{path}: empty file, not a csfh table")
     names: list[str] = []
     units: dict[str, str] = {}
     for field in header.split(","):
         m = _HEADER_FIELD.match(field)
         if m is None or not m.group("name"):
-            raise ValueError(f"{path}: header field {field!r} is not 'name [unit]'")
+            raise ResultsError(f"{path}: header field {field!r} is not 'name [unit]'")
         name = m.group("name")
         if name in units:
-            raise ValueError(f"{path}: column {name!r} appears twice")
+            raise ResultsError(f"{path}: column {name!r} appears twice")
         names.append(name)
         units[name] = m.group("unit") if m.group("unit") is not None else "-"
     try:
         data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     except ValueError as exc:
-        raise ValueError(f"{path}: not a table of numbers: {exc}") from None
+        raise ResultsError(f"{path}: not a table of numbers: {exc}") from None
     if data.size == 0:
         data = np.zeros((0, len(names)))
     if data.shape[1] != len(names):
-        raise ValueError(f"{path}: {data.shape[1]} values per row, {len(names)} columns named")
+        raise ResultsError(f"{path}: {data.shape[1]} values per row, {len(names)} columns named")
     return {n: data[:, i].copy() for i, n in enumerate(names)}, units
 
 

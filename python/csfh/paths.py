@@ -1,89 +1,120 @@
-"""Where the built artefacts are: inside the installed package, or in a source build tree."""
+"""Where the built artefacts are: the FMUs (FMI 2.0 and 3.0, the hinge and the comb-drive
+actuator) and the ctypes libraries (the core, the batch master).
+
+Each is looked for, in this order:
+
+1. the environment variable that names it (``CSFH_FMU``, ``CSFH_FMU3``, ``CSFH_COMBDRIVE_FMU``,
+   ``CSFH_CORE``, ``CSFH_BATCH``): a variable that is set must name an existing file, else
+   InstallError names the variable (never a silent fall-back to another build); the comb-drive
+   FMUs are also looked for beside ``CSFH_FMU`` / ``CSFH_FMU3`` (the same build);
+2. the installed package's own copy (inside ``csfh/``, where ``pip install .`` puts it);
+3. only for a package that is not installed, a source checkout used with
+   ``PYTHONPATH=python`` (the tests, the docs build): the checkout's ``build/`` directory. The
+   package counts as a checkout's when it is ``python/csfh`` beside the checkout's
+   ``CMakeLists.txt``; an installed package never looks outside its own files."""
 
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from pathlib import Path
 
+from .errors import InstallError, ParameterError
+
 _PACKAGE_DIR = Path(__file__).resolve().parent
-_SOURCE_ROOT = _PACKAGE_DIR.parents[1]
 
 
-def _first_existing(candidates: list[Path], what: str) -> Path:
-    for path in candidates:
-        if path.exists():
-            return path
-    raise FileNotFoundError(
-        f"{what} not found: install the package (pip install .) or build it "
-        "(cmake -S . -B build && cmake --build build)"
-    )
+def source_build() -> Path | None:
+    """The build directory of the source checkout this package is part of, or None for an
+    installed package (module docstring, rule 3)."""
+    root = _PACKAGE_DIR.parents[1]
+    if _PACKAGE_DIR.parent.name != "python" or not (root / "CMakeLists.txt").is_file():
+        return None
+    return root / "build"
 
 
-def _check_fmi_version(fmi_version: int) -> None:
+@dataclass(frozen=True)
+class Artefact:
+    """A built file: its path inside the package and the build tree, the environment variable
+    that names it, and the variable of a file it is built beside (the same build)."""
+
+    relative: str
+    variable: str | None = None
+    beside: str | None = None
+
+    def candidates(self) -> list[tuple[Path, str]]:
+        """(path, where it comes from) in the order they are tried."""
+        found: list[tuple[Path, str]] = []
+        if self.variable and os.environ.get(self.variable):
+            path = Path(os.environ[self.variable])
+            if not path.is_file():
+                raise InstallError(
+                    f"${self.variable} = {str(path)!r}: no such file (unset it to use the "
+                    "package's own copy)"
+                )
+            found.append((path, f"${self.variable}"))
+        if self.beside and os.environ.get(self.beside):
+            sibling = Path(os.environ[self.beside]).parent / Path(self.relative).name
+            if sibling.is_file():
+                found.append((sibling, f"beside ${self.beside}"))
+        found.append((_PACKAGE_DIR / self.relative, "package"))
+        build = source_build()
+        if build is not None:
+            found.append((build / self.relative, "source build"))
+        return found
+
+    def locate(self) -> tuple[Path, str]:
+        """The first existing candidate and where it comes from; InstallError naming every
+        place looked at otherwise."""
+        candidates = self.candidates()
+        for path, origin in candidates:
+            if path.is_file():
+                return path, origin
+        looked = ", ".join(str(p) for p, _ in candidates)
+        raise InstallError(
+            f"{self.relative} not found (looked at {looked}): install the package (pip install .) "
+            "or build it (cmake -S . -B build && cmake --build build)"
+        )
+
+
+ARTEFACTS = {
+    "fmu": Artefact("csfh.fmu", "CSFH_FMU"),
+    "fmu3": Artefact("fmi3/csfh.fmu", "CSFH_FMU3"),
+    "combdrive": Artefact("combdrive.fmu", "CSFH_COMBDRIVE_FMU", beside="CSFH_FMU"),
+    "combdrive3": Artefact("fmi3/combdrive.fmu", beside="CSFH_FMU3"),
+    "core": Artefact("libcsfh_core.so", "CSFH_CORE"),
+    "batch": Artefact("libcsfh_batch.so", "CSFH_BATCH"),
+}
+"""Every artefact the package uses, by key (`csfh info` lists them)."""
+
+
+def _fmi_key(base: str, fmi_version: int) -> str:
     if fmi_version not in (2, 3):
-        raise ValueError(f"fmi_version = {fmi_version!r}: the FMUs are built for FMI 2 and 3")
+        raise ParameterError(f"fmi_version = {fmi_version!r}: the FMUs are built for FMI 2 and 3")
+    return base if fmi_version == 2 else f"{base}3"
 
 
 def fmu_path(fmi_version: int = 2) -> Path:
-    """Path of csfh.fmu: $CSFH_FMU, the copy inside the package, or build/csfh.fmu.
+    """Path of csfh.fmu: $CSFH_FMU, the copy inside the package, or (a source checkout)
+    build/csfh.fmu. fmi_version=3: the FMI 3.0 build of the same model, $CSFH_FMU3,
+    fmi3/csfh.fmu inside the package or the build."""
+    return ARTEFACTS[_fmi_key("fmu", fmi_version)].locate()[0]
 
-    fmi_version=3: the FMI 3.0 build of the same model, $CSFH_FMU3, the package's fmi3/csfh.fmu,
-    or build/fmi3/csfh.fmu."""
-    _check_fmi_version(fmi_version)
-    candidates = []
-    if fmi_version == 3:
-        if os.environ.get("CSFH_FMU3"):
-            candidates.append(Path(os.environ["CSFH_FMU3"]))
-        candidates += [
-            _PACKAGE_DIR / "fmi3" / "csfh.fmu",
-            _SOURCE_ROOT / "build" / "fmi3" / "csfh.fmu",
-        ]
-        return _first_existing(candidates, "fmi3/csfh.fmu")
-    if os.environ.get("CSFH_FMU"):
-        candidates.append(Path(os.environ["CSFH_FMU"]))
-    candidates += [_PACKAGE_DIR / "csfh.fmu", _SOURCE_ROOT / "build" / "csfh.fmu"]
-    return _first_existing(candidates, "csfh.fmu")
+
+def combdrive_fmu_path(fmi_version: int = 2) -> Path:
+    """Path of combdrive.fmu (the comb-drive actuator for co-simulation): $CSFH_COMBDRIVE_FMU,
+    beside $CSFH_FMU (the same build), the copy inside the package, or build/combdrive.fmu.
+    fmi_version=3: beside $CSFH_FMU3, or fmi3/combdrive.fmu inside the package or the build."""
+    return ARTEFACTS[_fmi_key("combdrive", fmi_version)].locate()[0]
 
 
 def core_library_path() -> Path:
     """Path of libcsfh_core.so (the physics core for the harness): $CSFH_CORE, the package copy,
     or build/libcsfh_core.so."""
-    candidates = []
-    if os.environ.get("CSFH_CORE"):
-        candidates.append(Path(os.environ["CSFH_CORE"]))
-    candidates += [_PACKAGE_DIR / "libcsfh_core.so", _SOURCE_ROOT / "build" / "libcsfh_core.so"]
-    return _first_existing(candidates, "libcsfh_core.so")
-
-
-def combdrive_fmu_path(fmi_version: int = 2) -> Path:
-    """Path of combdrive.fmu (the comb-drive actuator for co-simulation): $CSFH_COMBDRIVE_FMU,
-    next to $CSFH_FMU (the same build), the copy inside the package, or build/combdrive.fmu.
-
-    fmi_version=3: the FMI 3.0 build, next to $CSFH_FMU3, the package's fmi3/combdrive.fmu, or
-    build/fmi3/combdrive.fmu."""
-    _check_fmi_version(fmi_version)
-    candidates = []
-    if fmi_version == 3:
-        if os.environ.get("CSFH_FMU3"):
-            candidates.append(Path(os.environ["CSFH_FMU3"]).parent / "combdrive.fmu")
-        candidates += [
-            _PACKAGE_DIR / "fmi3" / "combdrive.fmu",
-            _SOURCE_ROOT / "build" / "fmi3" / "combdrive.fmu",
-        ]
-        return _first_existing(candidates, "fmi3/combdrive.fmu")
-    if os.environ.get("CSFH_COMBDRIVE_FMU"):
-        candidates.append(Path(os.environ["CSFH_COMBDRIVE_FMU"]))
-    if os.environ.get("CSFH_FMU"):
-        candidates.append(Path(os.environ["CSFH_FMU"]).parent / "combdrive.fmu")
-    candidates += [_PACKAGE_DIR / "combdrive.fmu", _SOURCE_ROOT / "build" / "combdrive.fmu"]
-    return _first_existing(candidates, "combdrive.fmu")
+    return ARTEFACTS["core"].locate()[0]
 
 
 def batch_library_path() -> Path:
-    """Path of libcsfh_batch.so (the batch co-simulation master, csfh.runners.cs_batch):
-    $CSFH_BATCH, the package copy, or build/libcsfh_batch.so."""
-    candidates = []
-    if os.environ.get("CSFH_BATCH"):
-        candidates.append(Path(os.environ["CSFH_BATCH"]))
-    candidates += [_PACKAGE_DIR / "libcsfh_batch.so", _SOURCE_ROOT / "build" / "libcsfh_batch.so"]
-    return _first_existing(candidates, "libcsfh_batch.so")
+    """Path of libcsfh_batch.so (the co-simulation loop and batch master): $CSFH_BATCH, the
+    package copy, or build/libcsfh_batch.so."""
+    return ARTEFACTS["batch"].locate()[0]

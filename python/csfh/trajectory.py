@@ -1,5 +1,5 @@
 """The result of one simulation: an output table, optional per-step records, contact onsets and
-statistics, and its CSV table."""
+statistics, its CSV table, and its output signals on a grid."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from .errors import ResultsError
 from .output import read_table, write_table
 
 COLUMNS = ("t", "x", "y", "theta", "vx", "vy", "omega", "F_N", "F_T", "indentation", "v_T")
@@ -24,6 +25,11 @@ CONTACT_FIELDS = (
 )
 """Per-contact record every integrator reports (s, m/s, s, m/s, N, m): the indentation rate at the
 onset, the separation speed dg/dt at the release, the largest normal force and indentation."""
+SIGNALS = ("x", "y", "theta", "F_N", "F_T")
+"""Output signals kept on a grid (m, m, rad, N, N): x, y, theta are the values at the grid
+points; F_N and F_T the value of largest magnitude in each output interval (t_k-1, t_k] (over
+every integrator step the run recorded), so that an impact peak does not depend on where the
+grid happens to cut it."""
 UNITS = {
     "t": "s",
     "x": "m",
@@ -134,10 +140,31 @@ class Trajectory:
         Only the table is in the file: per-step records and contact lists are not."""
         table, _ = read_table(path)
         if "t" not in table:
-            raise ValueError(f"{path}: no time column 't'")
+            raise ResultsError(f"{path}: no time column 't'")
         return cls(
             model=Path(path).stem if model is None else model,
             scene=scene,
             table=table,
             contacts=np.zeros(0),
         )
+
+
+def interval_peaks(g: np.ndarray, at_grid: np.ndarray, t: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Per grid point k, the sample of largest magnitude among the grid value and every sample
+    (t, f) with g[k-1] < t <= g[k]."""
+    k = np.searchsorted(g, t, side="left")
+    inside = (k >= 1) & (k < len(g))
+    hi, lo = at_grid.copy(), at_grid.copy()
+    np.maximum.at(hi, k[inside], f[inside])
+    np.minimum.at(lo, k[inside], f[inside])
+    return np.where(np.abs(lo) > np.abs(hi), lo, hi)
+
+
+def signals_on_grid(tr: Trajectory, g: np.ndarray) -> dict[str, np.ndarray]:
+    """The run's SIGNALS on the grid g (see SIGNALS)."""
+    sig = {name: np.interp(g, tr.t, tr[name]) for name in SIGNALS}
+    for name in ("F_N", "F_T"):
+        t_all = np.concatenate([tr.t, tr.steps["t"]]) if tr.steps else tr.t
+        f_all = np.concatenate([tr[name], tr.steps[name]]) if tr.steps else tr[name]
+        sig[name] = interval_peaks(g, sig[name], t_all, f_all)
+    return sig

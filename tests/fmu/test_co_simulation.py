@@ -41,7 +41,8 @@ from fmu_binaries import run_cs_master
 from oracles import T_FIRST_CENTRAL, V_FIRST_CENTRAL, G
 
 from csfh.model.scene import Scene, load_scene
-from csfh.runners.fmu import simulate_cs, simulate_me
+from csfh.runners.co_simulation import simulate_cs
+from csfh.runners.model_exchange import simulate_me
 
 RHO_MAX_CENTRAL = 1.19279e-4  # docs/model.md §7.2, K_spheres, m: the indentation scale
 R1 = 0.18  # m, contact.R1 of the paper's scenes (Table 2)
@@ -458,7 +459,7 @@ def csfh_reference():
     """The harness's model-exchange run of the csfh scene (the FMU's start values) at rtol 1e-10:
     per contact, the peak F_N and indentation refined on CVODE's interpolant."""
     from csfh.model.scene import load_scene
-    from csfh.runners.fmu import simulate_me
+    from csfh.runners.model_exchange import simulate_me
 
     return simulate_me(load_scene("csfh"), "LN_spheres", rtol=1e-10, output_interval=1e-3)
 

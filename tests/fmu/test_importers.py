@@ -46,7 +46,8 @@ from fmu_instances import built
 from oracles import G
 
 from csfh.model.scene import Scene, load_scene
-from csfh.runners.fmu import STATE_NAMES, simulate_me
+from csfh.runners.fmu import STATE_NAMES
+from csfh.runners.model_exchange import simulate_me
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ("central", "asymmetric", "csfh")

@@ -18,7 +18,7 @@ from fmi2_calls import STATES, MakeFmu
 from oracles import T_FIRST_CENTRAL, V_FIRST_CENTRAL, G
 
 from csfh.model.scene import load_scene
-from csfh.runners.fmu import simulate_me
+from csfh.runners.model_exchange import simulate_me
 
 DELTA = 0.20 - 0.18  # R2 - R1 as the FMU computes it (0.02 + 1.7e-17)
 M1, I1 = 10.0, 0.1617  # Table 1

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from csfh.model.scene import load_scene
-from csfh.runners.fmu import simulate_me
+from csfh.runners.model_exchange import simulate_me
 
 STEP, STOP, LAW, LAW_NUMBER = 1e-3, 0.2, "LN_cylinders", 3
 

@@ -13,7 +13,7 @@ import numpy as np
 from oracles import G, rigid_impact_times
 
 from csfh.model.scene import load_scene
-from csfh.runners.fmu import simulate_me
+from csfh.runners.model_exchange import simulate_me
 from csfh.runners.moreau import moreau
 from csfh.runners.rk4 import rk4_event
 from csfh.studies.accuracy.metrics import contact_errors, observed_order

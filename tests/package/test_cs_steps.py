@@ -1,28 +1,31 @@
 """simulate_cs's communication loop in C (csfh.runners.cs_steps, csfh_cs_steps in
-libcsfh_batch.so) against the same loop in Python (step_loop="python", one ctypes call per FMI
-call): the same trajectory, bitwise, on the three scenes and on a grid whose last step is
-shorter; the same error, naming the same call and time, for a run whose FMU fails mid-way; the
-chunking does not change anything; without the library simulate_cs loops in Python. And the C
-loop alone on a fake FMU (Python callbacks): its grid arithmetic is Python's, it stops at the
-failing call and says which one and when."""
+libcsfh_batch.so) against the same loop in Python (`python_loop` here, the oracle: one ctypes
+call per FMI call): the same trajectory, bitwise, on the three scenes and on a grid whose last
+step is shorter; the same error, naming the same call and time, for a run whose FMU fails
+mid-way; the chunking does not change anything. And the C loop alone on a fake FMU (Python
+callbacks): its grid arithmetic is Python's, it stops at the failing call and says which one and
+when."""
 
 from __future__ import annotations
 
 import re
-from ctypes import CFUNCTYPE, POINTER, c_double, c_int, c_size_t, c_uint, c_void_p
+import time
+from ctypes import CFUNCTYPE, POINTER, c_double, c_int, c_size_t, c_uint, c_void_p, cast
 from pathlib import Path
 from typing import Any
 
 import fmpy
 import numpy as np
 import pytest
-from fmpy.fmi1 import FMICallException
 
 from csfh.errors import SimulationError
 from csfh.model.scene import load_scene
+from csfh.progress import Progress
+from csfh.runners import co_simulation as cs_runner
 from csfh.runners import cs_steps
-from csfh.runners import fmu as fmu_runner
-from csfh.runners.fmu import simulate_cs
+from csfh.runners.co_simulation import Grid, LoopState, simulate_cs
+from csfh.runners.fmi2_slave import Fmi2Slave, FmiCallError
+from csfh.runners.fmu import unzipped_fmu
 from csfh.trajectory import Trajectory
 
 STATS = ("steps", "rhs_evaluations", "evaluations", "contact_count")
@@ -42,6 +45,27 @@ def assert_identical(a: Trajectory, b: Trajectory) -> None:
         assert a.stats[key] == b.stats[key], key
 
 
+def python_loop(slave: Fmi2Slave, grid: Grid, state: LoopState, progress: Progress | None) -> None:
+    """The oracle: the communication loop in Python, one FMI call at a time, on the grid
+    min((k + 1) h, t_end) and with the reads of the C loop."""
+    for k in range(grid.n):
+        t_next = min((k + 1) * grid.step, grid.stop_time)
+        t0 = time.perf_counter()
+        try:
+            slave.do_step(state.t, t_next - state.t)
+        except FmiCallError as exc:
+            exc.t = state.t
+            raise
+        state.seconds += time.perf_counter() - t0
+        state.t = t_next  # the time a failed read reports
+        reals = np.array([slave.get("Real", grid.reals)])
+        counts = np.array(slave.get("Integer", [grid.count]))
+        actives = np.array(slave.get("Boolean", [grid.active])) != 0
+        state.points(np.array([t_next]), reals, counts, actives, grid.n_outputs)
+        if progress is not None:
+            progress.update(state.t / grid.stop_time)
+
+
 @pytest.mark.parametrize("scene_name", ["central", "asymmetric", "csfh"])
 @pytest.mark.parametrize(
     ("law", "step", "stop_time"),
@@ -53,8 +77,8 @@ def test_c_loop_is_the_python_loop_bitwise(
 ) -> None:
     scene = load_scene(scene_name)
     kw: dict[str, Any] = {"communication_step": step, "stop_time": stop_time}
-    python = simulate_cs(scene, law, step_loop="python", **kw)
-    c = simulate_cs(scene, law, step_loop="c", **kw)
+    python = simulate_cs(scene, law, loop=python_loop, **kw)
+    c = simulate_cs(scene, law, **kw)
     assert_identical(python, c)
     t = c.table["t"]
     if step is not None:  # the last step is shorter than the others, and ends at the stop time
@@ -67,10 +91,10 @@ def test_c_loop_is_the_python_loop_bitwise(
 @pytest.mark.parametrize("chunk", [(1, 1), (7, 7), (300, 300)])
 def test_chunking_does_not_change_the_run(monkeypatch: pytest.MonkeyPatch, chunk: tuple) -> None:
     scene = load_scene("asymmetric")
-    default = simulate_cs(scene, "LN_spheres", stop_time=0.3, step_loop="c")
-    monkeypatch.setattr(fmu_runner, "CS_STEPS_CHUNK", chunk)
-    assert fmu_runner.chunk_size(3000) == chunk[0]
-    chunked = simulate_cs(scene, "LN_spheres", stop_time=0.3, step_loop="c")
+    default = simulate_cs(scene, "LN_spheres", stop_time=0.3)
+    monkeypatch.setattr(cs_runner, "CS_STEPS_CHUNK", chunk)
+    assert cs_runner.chunk_size(3000) == chunk[0]
+    chunked = simulate_cs(scene, "LN_spheres", stop_time=0.3)
     assert_identical(default, chunked)
     assert len(default.contacts) >= 2
 
@@ -86,7 +110,7 @@ class Recorder:
 
 
 def test_progress_between_chunks(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(fmu_runner, "CS_STEPS_CHUNK", (100, 100))
+    monkeypatch.setattr(cs_runner, "CS_STEPS_CHUNK", (100, 100))
     progress = Recorder()
     run = simulate_cs(load_scene("central"), "LN_spheres", stop_time=0.1, progress=progress)  # type: ignore[arg-type]
     t = run.table["t"]
@@ -106,11 +130,11 @@ def test_failure_mid_way_is_reported_as_by_the_python_loop(
     scene = load_scene("central")
     kw: dict[str, Any] = {"stop_time": 0.2, "parameters": MASSLESS}
     with pytest.raises(SimulationError) as python:
-        simulate_cs(scene, "LN_spheres", step_loop="python", **kw)
+        simulate_cs(scene, "LN_spheres", loop=python_loop, **kw)
     if chunk is not None:  # the failing step first in a chunk (782), last in one (781)
-        monkeypatch.setattr(fmu_runner, "CS_STEPS_CHUNK", chunk)
+        monkeypatch.setattr(cs_runner, "CS_STEPS_CHUNK", chunk)
     with pytest.raises(SimulationError) as c:
-        simulate_cs(scene, "LN_spheres", step_loop="c", **kw)
+        simulate_cs(scene, "LN_spheres", **kw)
     assert str(c.value) == str(python.value)
     # the failed step's start, as the FMU logged it, is the time in the message
     logged = re.search(r"the step from t = (\S+) to", str(c.value))
@@ -122,23 +146,18 @@ def test_failure_mid_way_is_reported_as_by_the_python_loop(
     assert float(reported.group(1)) == float(f"{t_start:.9g}")
 
 
-def test_without_the_library_the_loop_is_python(monkeypatch: pytest.MonkeyPatch) -> None:
-    scene = load_scene("central")
-    c = simulate_cs(scene, "LN_spheres", stop_time=0.3)  # the default: the C loop
-
-    def missing() -> Any:
-        raise FileNotFoundError("libcsfh_batch.so not found")
-
-    def no_c_loop(*args: Any, **kwargs: Any) -> Any:
-        raise AssertionError("the C loop ran without its library")
-
-    monkeypatch.setattr("csfh.paths.batch_library_path", missing)
-    monkeypatch.setattr(cs_steps, "CSteps", no_c_loop)
-    assert not cs_steps.available()
-    python = simulate_cs(scene, "LN_spheres", stop_time=0.3)
-    assert_identical(c, python)
-    with pytest.raises(ValueError, match="step_loop"):
-        simulate_cs(scene, "LN_spheres", step_loop="fortran")
+def test_without_the_library_a_run_says_which_file_is_missing(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """The C loop is the only co-simulation loop: without libcsfh_batch.so a run fails with
+    the variable that names the missing file."""
+    cs_steps.library.cache_clear()
+    monkeypatch.setenv("CSFH_BATCH", str(tmp_path / "nowhere.so"))
+    try:
+        with pytest.raises(FileNotFoundError, match=r"\$CSFH_BATCH = .*nowhere.so"):
+            simulate_cs(load_scene("central"), "LN_spheres", stop_time=0.01)
+    finally:
+        cs_steps.library.cache_clear()
 
 
 # ------------------------------------------------------------------------------------------
@@ -151,7 +170,7 @@ FMI2_ERROR, FMI2_WARNING = 3, 1
 
 
 class FakeSlave:
-    """What CSteps takes from an fmpy FMU2Slave (dll with the fmi2 functions, component); its
+    """What CSteps takes from an instance (the addresses of its fmi2 functions, component); its
     time advances with every fmi2DoStep, which fails at call `fail_step`; reading fails at step
     `fail_read` (0 based) for the call named there."""
 
@@ -184,6 +203,9 @@ class FakeSlave:
 
         self.dll = Dll()
         self.component = 12345  # passed through, never dereferenced by the loop
+
+    def address(self, name: str) -> int:
+        return cast(getattr(self.dll, name), c_void_p).value or 0
 
 
 def python_grid(k_first: int, k_last: int, h: float, t_end: float) -> list[float]:
@@ -231,7 +253,7 @@ def test_c_loop_stops_at_the_failed_call(
     fake = FakeSlave(fail_step, fail_read)
     loop = cs_steps.CSteps(fake, h, t_end, [1], [2], [3])
     t_start = min(k_first * h, t_end)
-    with pytest.raises(FMICallException) as info:
+    with pytest.raises(FmiCallError) as info:
         loop.run(k_first, 20, t_start)
     exc: Any = info.value
     assert exc.function == call and exc.status == FMI2_ERROR
@@ -265,6 +287,6 @@ def test_the_fmu_binary_stays_loaded_between_runs() -> None:
     the binary is still mapped, and the next run on it gives the same trajectory."""
     scene = load_scene("central")
     first = simulate_cs(scene, "LN_spheres", stop_time=0.1)
-    binary = Path(fmu_runner.unzipped_fmu(), "binaries", fmpy.platform, "csfh.so").resolve()
+    binary = Path(unzipped_fmu(), "binaries", fmpy.platform, "csfh.so").resolve()
     assert str(binary) in Path("/proc/self/maps").read_text()
     assert_identical(first, simulate_cs(scene, "LN_spheres", stop_time=0.1))

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from csfh.errors import ResultsError
 from csfh.model import model_info
 from csfh.output import read_table, write_table
 from csfh.studies import paper_figures
@@ -67,7 +68,7 @@ def test_a_trajectory_reads_back_from_its_csv(tmp_path: Path) -> None:
 def test_a_bad_table_is_refused_naming_the_file(tmp_path: Path, text: str, message: str) -> None:
     path = tmp_path / "bad.csv"
     path.write_text(text)
-    with pytest.raises(ValueError, match=re.escape(message)) as info:
+    with pytest.raises(ResultsError, match=re.escape(message)) as info:
         read_table(path)
     assert str(path) in str(info.value)
 

@@ -36,8 +36,10 @@ from csfh.batch.tasks import Task, run_chunk
 from csfh.cli.main import main
 from csfh.model import model_info
 from csfh.model.scene import load_scene
+from csfh.runners.co_simulation import simulate_cs
 from csfh.runners.cs_batch import cs_batch
-from csfh.runners.fmu import simulate_cs, simulate_me, start_values, unzipped_fmu
+from csfh.runners.fmu import start_values, unzipped_fmu
+from csfh.runners.model_exchange import simulate_me
 from csfh.studies.shock.conditions import CONDITIONS, G_STANDARD, condition
 from csfh.studies.shock.study import clopper_pearson
 
@@ -303,13 +305,13 @@ def _tasks(interface: str, signals: bool) -> list[Task]:
 
 @pytest.mark.parametrize("signals", [False, True])
 def test_task_chunks_run_as_batches_with_the_single_runs_results(signals: bool) -> None:
-    from csfh.batch.tasks import _run_fmu
+    from csfh.batch.tasks import run_alone
 
     tasks = _tasks("cs", signals)
     chunk = [t for t in tasks if t.model == "LN_ESDU"]
     batched = run_chunk(chunk)
     for task, (key, summary, sig, _) in zip(chunk, batched, strict=True):
-        k1, s1, sig1, _ = _run_fmu(task)
+        k1, s1, sig1, _ = run_alone(task)
         assert key == k1 == task.key and summary == s1
         assert "peak_flexure_stress" in summary
         if signals:

@@ -13,7 +13,8 @@ import pytest
 from oracles import T_FIRST_CENTRAL
 
 from csfh.model.scene import Scene, load_scene
-from csfh.runners.fmu import STATE_NAMES, simulate_me
+from csfh.runners.fmu import STATE_NAMES
+from csfh.runners.model_exchange import simulate_me
 from csfh.runners.moreau import moreau
 
 
@@ -118,8 +119,9 @@ def test_me_driver_agrees_with_fmpy_simulate_fmu(fmu_path: Path) -> None:
 
 
 def test_model_exchange_runner_has_a_step_budget() -> None:
+    from csfh.errors import SimulationError
     from csfh.model.scene import load_scene
-    from csfh.runners.fmu import SimulationError, simulate_me
+    from csfh.runners.model_exchange import simulate_me
 
     with pytest.raises(SimulationError, match="step budget"):
         simulate_me(load_scene("central"), "LN_spheres", max_steps=200)

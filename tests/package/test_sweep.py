@@ -13,13 +13,15 @@ import pytest
 
 from csfh.batch.executors import run_tasks
 from csfh.batch.store import ResultStore
-from csfh.batch.tasks import Task, interval_peaks
+from csfh.batch.tasks import Task
 from csfh.cli.main import main
+from csfh.errors import InstallError
 from csfh.model.scene import load_scene
 from csfh.studies.sweep.analysis import compare_with_paper
 from csfh.studies.sweep.influence import MeasureSettings, influence
 from csfh.studies.sweep.parameters import OUTPUTS
 from csfh.studies.sweep.spec import SweepSpec, sweep_tasks
+from csfh.trajectory import interval_peaks
 
 T = np.arange(10001) * 1e-4  # 1 s on the sweep's grid
 
@@ -233,7 +235,7 @@ def test_task_key_depends_on_what_changes_the_result() -> None:
 
 def test_a_worker_with_other_binaries_refuses_the_task(tmp_path: Path) -> None:
     task = Task(scene=load_scene("csfh"), model="Moreau", stop_time=0.01, binaries="0" * 16)
-    with pytest.raises(RuntimeError, match="not the submitter's"):
+    with pytest.raises(InstallError, match="not the submitter's"):
         run_tasks([task], ResultStore(tmp_path), workers=1, quiet=True)
     assert len(ResultStore(tmp_path)) == 0
 

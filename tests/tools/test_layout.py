@@ -16,20 +16,20 @@ PACKAGE = Path(__file__).resolve().parents[2] / "python" / "csfh"
 
 LAYERS: dict[str, int] = {
     "csfh._version": 0,
-    "csfh.errors": 0,
-    "csfh.paths": 0,
-    "csfh.output": 0,
-    "csfh.progress": 0,
-    "csfh.scenes": 0,
-    "csfh.trajectory": 1,
-    "csfh.plotting": 1,
-    "csfh.model": 2,
-    "csfh.runners": 3,
-    "csfh.batch": 4,
-    "csfh.cosim": 4,
-    "csfh.studies": 5,
-    "csfh.cli": 6,
-    "csfh": 7,  # the package's face (__init__, __main__)
+    "csfh.errors": 0,  # below the rest of the foundation: every module raises its types
+    "csfh.paths": 1,
+    "csfh.output": 1,
+    "csfh.progress": 1,
+    "csfh.scenes": 1,
+    "csfh.trajectory": 2,
+    "csfh.plotting": 2,
+    "csfh.model": 3,
+    "csfh.runners": 4,
+    "csfh.batch": 5,
+    "csfh.cosim": 5,
+    "csfh.studies": 6,
+    "csfh.cli": 7,
+    "csfh": 8,  # the package's face (__init__, __main__)
 }
 """Rank of each part: a module may import only from parts of a lower rank, and from its own part."""
 

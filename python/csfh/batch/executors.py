@@ -16,6 +16,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
+from ..errors import CsfhError, InstallError
 from ..progress import Progress
 from .store import ResultStore
 from .tasks import Result, Task, batch_group, run_chunk, worker_init
@@ -175,13 +176,13 @@ def _run_dask(
     try:
         from distributed import Client, as_completed
     except ImportError as exc:  # pragma: no cover - depends on the installation
-        raise RuntimeError(
+        raise InstallError(
             "--dask needs dask.distributed: pip install 'dask[distributed]'"
         ) from exc
     try:
         client = Client(address, timeout="10s")
     except OSError as exc:
-        raise OSError(f"cannot connect to the Dask scheduler at {address}: {exc}") from None
+        raise CsfhError(f"cannot connect to the Dask scheduler at {address}: {exc}") from None
     futures = []
     try:
         for chunk in chunks:

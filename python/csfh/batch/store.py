@@ -28,6 +28,7 @@ from typing import Any, cast
 
 import numpy as np
 
+from ..errors import ResultsError, file_errors
 from ..output import replace_file
 from .tasks import Task
 
@@ -66,11 +67,12 @@ class ResultStore:
 
     def __init__(self, directory: Path) -> None:
         self.directory = Path(directory)
-        self.directory.mkdir(parents=True, exist_ok=True)
         self.index = self.directory / INDEX
         self.records: dict[str, dict[str, Any]] = {}
         self.problems: list[str] = []
-        self._load()
+        with file_errors(self.directory, "is not a usable result store"):
+            self.directory.mkdir(parents=True, exist_ok=True)
+            self._load()
 
     # -- reading ------------------------------------------------------------------------------
 
@@ -181,7 +183,8 @@ class ResultStore:
                 np.savez_compressed(buffer, **cast(dict[str, Any], signals))
                 payload = buffer.getvalue()
                 digest = hashlib.sha256(payload).hexdigest()
-                (self.directory / "signals").mkdir(exist_ok=True)
+                with file_errors(self.directory / "signals"):
+                    (self.directory / "signals").mkdir(exist_ok=True)
                 replace_file(self.directory / rel, payload)
             rec: dict[str, Any] = {
                 "key": task.key,
@@ -199,7 +202,7 @@ class ResultStore:
         if not lines:
             return
         text = "".join(lines).encode("utf-8")
-        with _locked(self.directory), open(self.index, "a+b") as fh:
+        with file_errors(self.index), _locked(self.directory), open(self.index, "a+b") as fh:
             fh.seek(0, os.SEEK_END)
             if fh.tell() > 0:  # after a torn line of someone else's: start a line of our own
                 fh.seek(-1, os.SEEK_END)
@@ -225,4 +228,4 @@ class ResultStore:
             with np.load(path) as data:
                 return {name: data[name] for name in data.files}
         except (OSError, ValueError, zipfile.BadZipFile) as exc:
-            raise ValueError(f"{path}: cannot be read ({exc}); run the command again") from None
+            raise ResultsError(f"{path}: cannot be read ({exc}); run the command again") from None

@@ -5,10 +5,10 @@ binaries), so a re-run with the same output directory skips the tasks already do
 `csfh.batch.store`), and the executor never matters (`csfh.batch.executors`): every task is
 computed by the same function, `run_chunk`, from the same inputs, in whichever process.
 
-Moreau tasks of the same scene and settings are grouped into chunks and run as one batch in the C
-core (csfh.runners.moreau_batch); so are event-driven co-simulation tasks (interface "cs"), run by
-the batch master in the FMU's own binary (csfh.runners.cs_batch, bitwise the single runs);
-model-exchange tasks run through fmpy one at a time."""
+Each task runs on the runner of its model and interface (csfh.runners.registry); the tasks of a
+runner that batches (Moreau in the C core, co-simulation in the batch master, bitwise the single
+runs) with the same scene and settings are grouped into chunks and run as one batch; the others
+run one at a time."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ import hashlib
 import json
 import signal
 import threading
-import time
 from collections.abc import Sequence
+from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field
 from functools import cache, cached_property
 from pathlib import Path
@@ -25,16 +25,13 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import InstallError
 from ..model._csfh_variables import DEFAULT_STOP_TIME, OUTPUT_INTERVAL
 from ..model.scene import Scene
+from ..runners.registry import Runner, TrajectoryRuns, runner_for
 
 SCHEMA = 3  # 2: forces of the event-driven runs as interval peaks; 3: co-simulation summaries
 # from the FMU's peak outputs and contact count, stress peaks
-SIGNALS = ("x", "y", "theta", "F_N", "F_T")
-"""Output signals kept on the grid for sweeps (m, m, rad, N, N). x, y, theta are the values at
-the grid points; F_N and F_T the value of largest magnitude in each output interval (t_k-1, t_k]
-(event-driven: over every integrator step; Moreau: the step with the largest impulse), so that an
-impact peak does not depend on where the grid happens to cut it."""
 _FMU_LOCK = threading.Lock()  # fmpy instances in one process: one run at a time (Dask threads)
 
 
@@ -117,7 +114,7 @@ def task_key(task: Task) -> str:
         "parameters": sorted([k, float(v)] for k, v in task.parameters),
         "stop_time": float(task.stop_time),
         "output_interval": float(task.output_interval),
-        "interface": task.interface if task.model != "Moreau" else "core",
+        "interface": runner_for(task.model, task.interface).interface,
         "signals": task.signals,
     }
     text = json.dumps(spec, sort_keys=True, separators=(",", ":"))
@@ -127,17 +124,6 @@ def task_key(task: Task) -> str:
 def grid(stop_time: float, output_interval: float) -> np.ndarray:
     n = round(stop_time / output_interval)
     return np.arange(n + 1) * output_interval
-
-
-def interval_peaks(g: np.ndarray, at_grid: np.ndarray, t: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """Per grid point k, the sample of largest magnitude among the grid value and every sample
-    (t, f) with g[k-1] < t <= g[k]."""
-    k = np.searchsorted(g, t, side="left")
-    inside = (k >= 1) & (k < len(g))
-    hi, lo = at_grid.copy(), at_grid.copy()
-    np.maximum.at(hi, k[inside], f[inside])
-    np.minimum.at(lo, k[inside], f[inside])
-    return np.where(np.abs(lo) > np.abs(hi), lo, hi)
 
 
 # ------------------------------------------------------------------------------------------
@@ -179,150 +165,76 @@ def _run_summary(s: dict[str, Any]) -> dict[str, Any]:
     )
 
 
-def _signals(task: Task, tr: Any) -> dict[str, np.ndarray] | None:
-    """The output signals of a run on the task's grid (see SIGNALS), or None."""
-    if not task.signals:
-        return None
-    g = grid(task.stop_time, task.output_interval)
-    sig = {name: np.interp(g, tr.t, tr[name]) for name in SIGNALS}
-    for name in ("F_N", "F_T"):
-        t_all = np.concatenate([tr.t, tr.steps["t"]]) if tr.steps else tr.t
-        f_all = np.concatenate([tr[name], tr.steps[name]]) if tr.steps else tr[name]
-        sig[name] = interval_peaks(g, sig[name], t_all, f_all)
-    return sig
-
-
-def _run_fmu(task: Task) -> Result:
-    from ..runners.fmu import simulate_cs, simulate_me
-
-    with _FMU_LOCK:
-        wall = time.perf_counter()
-        if task.interface == "cs":
-            tr = simulate_cs(
-                task.scene,
-                task.model,
-                stop_time=task.stop_time,
-                communication_step=task.output_interval,
-                parameters=task.overrides(),
-            )
-        else:
-            tr = simulate_me(
-                task.scene,
-                task.model,
-                stop_time=task.stop_time,
-                output_interval=task.output_interval,
-                parameters=task.overrides(),
-                max_step_records=1_000_000,
-            )
-        wall = time.perf_counter() - wall
-    return task.key, _run_summary(tr.summary()), _signals(task, tr), wall
-
-
-def _run_cs_batch(tasks: Sequence[Task]) -> list[Result]:
-    """Co-simulation tasks of one scene, model, horizon and grid, with the same parameter
-    names, as one call into the batch master: the same summaries and signals as _run_fmu gives
-    each of them alone (bitwise, tested)."""
-    from ..runners.cs_batch import cs_batch
-
+def _run_group(runner: Runner, tasks: Sequence[Task]) -> list[Result]:
+    """Tasks of one scene, model, horizon and grid as one `run_many` of their runner: a batch,
+    or runs one by one (the same results either way, tested)."""
     first = tasks[0]
-    batch = cs_batch(
-        first.scene,
-        first.model,
-        [t.overrides() for t in tasks],
-        stop_time=first.stop_time,
-        communication_step=first.output_interval,
-        record=first.signals,
-    )
-    wall = batch.wall_time / len(tasks)
-    out: list[Result] = []
-    for i, task in enumerate(tasks):
-        sig = _signals(task, batch.trajectory(i)) if task.signals else None
-        out.append((task.key, _run_summary(batch.summary(i)), sig, wall))
-    return out
-
-
-def _run_moreau(tasks: Sequence[Task]) -> list[Result]:
-    from ..runners.moreau_batch import moreau_batch
-
-    first = tasks[0]
-    batch = moreau_batch(
-        first.scene,
-        [t.overrides() for t in tasks],
-        stop_time=first.stop_time,
-        output_interval=first.output_interval,
-    )
-    if np.any(batch.status != 0):
-        bad = int(np.flatnonzero(batch.status != 0)[0])
-        raise FloatingPointError(
-            f"Moreau: non-finite state for parameters {tasks[bad].overrides()}; reduce h"
+    with _FMU_LOCK if runner.exclusive else nullcontext():
+        runs = runner.run_many(
+            first.scene,
+            first.model,
+            [t.overrides() for t in tasks],
+            stop_time=first.stop_time,
+            output_interval=first.output_interval,
+            record=first.signals,
         )
-    wall = batch.wall_time / len(tasks)
-    out: list[Result] = []
     g = grid(first.stop_time, first.output_interval) if first.signals else None
-    for i, task in enumerate(tasks):
-        t_imp = batch.impact_times(i)
-        F_N, F_T = batch.column(i, "F_N"), batch.column(i, "F_T")
-        summary = _summary(
-            float(t_imp[0]) if len(t_imp) else None,
-            int(batch.stats[i, 5]),
-            float(np.max(F_N)),
-            float(np.max(np.abs(F_T))),
-            int(batch.stats[i, 0]),
+    return [
+        (
+            task.key,
+            _run_summary(runs.summary(i)),
+            runs.signals(i, g) if g is not None else None,
+            runs.run_time(i),
         )
-        sig = None
-        if g is not None:
-            t = batch.column(i, "t")
-            sig = {name: np.interp(g, t, batch.column(i, name)) for name in SIGNALS}
-        out.append((task.key, summary, sig, wall))
-    return out
+        for i, task in enumerate(tasks)
+    ]
+
+
+def run_alone(task: Task) -> Result:
+    """A task as one run of its runner (`Runner.run`) rather than in a batch: the result a batch
+    gives it (tested), at the cost of one run per call."""
+    runner = runner_for(task.model, task.interface)
+    with _FMU_LOCK if runner.exclusive else nullcontext():
+        tr = runner.run(
+            task.scene,
+            task.model,
+            stop_time=task.stop_time,
+            output_interval=task.output_interval,
+            parameters=task.overrides(),
+        )
+    runs = TrajectoryRuns([tr])
+    g = grid(task.stop_time, task.output_interval) if task.signals else None
+    signals = runs.signals(0, g) if g is not None else None
+    return task.key, _run_summary(runs.summary(0)), signals, runs.run_time(0)
 
 
 def run_chunk(tasks: Sequence[Task]) -> list[Result]:
-    """Run a chunk: Moreau tasks of one scene and settings as one batch, anything else one by
-    one. This is the only function that computes results, whatever the executor."""
+    """Run a chunk: tasks that form one batch of a runner that batches in one call, anything
+    else one by one. This is the only function that computes results, whatever the executor."""
     if not tasks:
         return []
     here = binaries_fingerprint()
     if any(t.binaries != here for t in tasks):
-        raise RuntimeError(
+        raise InstallError(
             f"this worker's csfh binaries ({here}) are not the submitter's "
             f"({tasks[0].binaries}): install the same csfh build on every worker"
         )
-    if tasks[0].model == "Moreau":
-        return _run_moreau(tasks)
-    if tasks[0].interface == "cs" and batchable(tasks) and _batch_master_available():
-        return _run_cs_batch(tasks)
-    return [_run_fmu(t) for t in tasks]
+    runner = runner_for(tasks[0].model, tasks[0].interface)
+    if runner.batches and batchable(tasks):
+        return _run_group(runner, tasks)
+    return [r for t in tasks for r in _run_group(runner_for(t.model, t.interface), [t])]
 
 
 def batch_group(task: Task) -> tuple[Any, ...] | None:
-    """The group of tasks that run together as one batch (None: alone): Moreau tasks of one
-    scene and settings; co-simulation tasks of one scene, model and settings that override the
-    same parameters (the batch master sets the same variables in every run)."""
-    base = (
-        _fingerprint(task.scene)[1],
-        task.stop_time,
-        task.output_interval,
-        task.signals,
-    )
-    if task.model == "Moreau":
-        return ("Moreau", *base)
-    if task.interface == "cs":
-        return ("cs", task.model, tuple(sorted(k for k, _ in task.parameters)), *base)
-    return None
-
-
-@cache
-def _batch_master_available() -> bool:
-    """Whether libcsfh_batch.so is there (a build without it runs co-simulation tasks one by
-    one through fmpy, with the same results)."""
-    from ..paths import batch_library_path
-
-    try:
-        batch_library_path()
-    except FileNotFoundError:
-        return False
-    return True
+    """The group of tasks that run together as one batch (None: alone): tasks of a runner that
+    batches, of one scene, model and settings, and where the runner needs it (the batch master
+    sets the same variables in every run) overriding the same parameters."""
+    runner = runner_for(task.model, task.interface)
+    if not runner.batches:
+        return None
+    names = tuple(sorted(k for k, _ in task.parameters)) if runner.same_parameters else ()
+    base = (_fingerprint(task.scene)[1], task.stop_time, task.output_interval, task.signals)
+    return (runner.interface, task.model, names, *base)
 
 
 def batchable(tasks: Sequence[Task]) -> bool:

@@ -6,7 +6,15 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from .common import SCENE_HELP, add_command, add_quiet, out_dir, positive_float, positive_int
+from .common import (
+    SCENE_HELP,
+    CliError,
+    add_command,
+    add_quiet,
+    out_dir,
+    positive_float,
+    positive_int,
+)
 
 
 def _cmd_accuracy(args: argparse.Namespace) -> int:
@@ -69,7 +77,7 @@ def _cmd_stress(args: argparse.Namespace) -> int:
 
     cases = select_cases(quick=args.quick, only=args.only)
     if not cases:
-        raise ValueError(f"--only = {args.only!r} matches no case (csfh stress --list)")
+        raise CliError(f"--only = {args.only!r} matches no case (csfh stress --list)")
     if args.list:
         width = max(len(c.group) for c in cases)
         for c in cases:

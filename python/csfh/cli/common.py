@@ -13,13 +13,10 @@ import textwrap
 from pathlib import Path
 from typing import Any
 
+from ..errors import CliError as CliError  # the commands' one-line error
 from ..scenes import BUILTIN_SCENES
 
 SCENE_HELP = f"built-in scene ({', '.join(BUILTIN_SCENES)}) or the path of a .toml scene file"
-
-
-class CliError(Exception):
-    """A problem to report on one line, exit status 2."""
 
 
 class HelpFormatter(argparse.HelpFormatter):

@@ -33,12 +33,12 @@ def build_parser() -> Any:
 
 
 def reported_errors() -> tuple[type[BaseException], ...]:
-    """Errors reported on one line (exit status 2): bad input, a failed run, a file that cannot
-    be read or written, and memory exhausted."""
+    """Errors reported on one line (exit status 2): csfh's own (csfh.errors: bad input, a failed
+    run, a file that cannot be read or written, a missing binary) and memory exhausted. Anything
+    else is a bug in csfh and shows its traceback."""
     from ..errors import USER_ERRORS
-    from .common import CliError
 
-    return (CliError, MemoryError, *USER_ERRORS)
+    return USER_ERRORS
 
 
 def one_line(exc: BaseException) -> str:

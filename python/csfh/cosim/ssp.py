@@ -48,7 +48,7 @@ from xml.etree import ElementTree as ET
 import numpy as np
 
 from .._version import __version__
-from ..errors import SceneError
+from ..errors import ResultsError, SceneError
 from ..model.cosim_section import CONNECTIONS, DEFAULT_TOLERANCE, CosimSettings
 from ..model.fmus import description
 from ..model.scene import Scene, check_horizon, load_scene
@@ -315,7 +315,7 @@ def write_ssp(
     """Write the scene's SSP archive to `path`, whole or not at all (csfh.output)."""
     path = Path(path)
     if not path.parent.is_dir():
-        raise FileNotFoundError(f"{path}: the directory {path.parent} does not exist")
+        raise ResultsError(f"{path}: the directory {path.parent} does not exist")
     data = ssp_bytes(scene, step=step, stop_time=stop_time)
     return write_bytes(path, data)
 

@@ -11,7 +11,7 @@ from functools import cache
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import InstallError, ParameterError, SimulationError
 from ..paths import core_library_path
 from ._csfh_variables import CORE_ABI_VERSION as ABI_VERSION
 from ._csfh_variables import INTERFACE
@@ -91,7 +91,7 @@ def library() -> ctypes.CDLL:
         fn.restype = restype
         fn.argtypes = argtypes
     if lib.csfh_api_abi_version() != ABI_VERSION:
-        raise RuntimeError(
+        raise InstallError(
             f"{core_library_path()} has ABI {lib.csfh_api_abi_version()}, "
             f"expected {ABI_VERSION}: rebuild the package"
         )
@@ -152,13 +152,15 @@ class CoreModel:
     def state(self, x: np.ndarray) -> None:
         x = np.ascontiguousarray(x, dtype=float)
         if x.shape != (N_STATES,):
-            raise ValueError(f"the state has {N_STATES} components [x, y, theta, vx, vy, omega]")
+            raise ParameterError(
+                f"the state has {N_STATES} components [x, y, theta, vx, vy, omega]"
+            )
         self._lib.csfh_api_set_state(self._h, _ptr(x))
 
     def set_inputs(self, u: np.ndarray) -> None:
         u = np.ascontiguousarray(u, dtype=float)
         if u.shape != (N_INPUTS,):
-            raise ValueError(f"the inputs are {N_INPUTS} values [F_ext[1], F_ext[2], M_ext]")
+            raise ParameterError(f"the inputs are {N_INPUTS} values [F_ext[1], F_ext[2], M_ext]")
         self._lib.csfh_api_set_inputs(self._h, _ptr(u))
 
     def derivatives(self, x: np.ndarray) -> np.ndarray:
@@ -166,7 +168,7 @@ class CoreModel:
         xdot = np.empty(N_STATES)
         status = self._lib.csfh_api_derivatives(self._h, _ptr(x), _ptr(xdot))
         if status < 0:
-            raise FloatingPointError(f"non-finite derivative at x = {x.tolist()}")
+            raise SimulationError(f"non-finite derivative at x = {x.tolist()}")
         return xdot
 
     def smooth_forces(self, q: np.ndarray) -> np.ndarray:

@@ -10,6 +10,7 @@ from collections.abc import Iterable
 from functools import cache
 from typing import TYPE_CHECKING
 
+from ..errors import ParameterError
 from ..paths import fmu_path
 from ._csfh_variables import INTERFACE
 from .interface import Variable
@@ -59,29 +60,29 @@ def require(names: Iterable[str], what: str) -> None:
 
 def coerce(name: str, value: object) -> float | int | bool:
     """Turn a user value into what the variable takes (enumeration items by name); raises
-    ValueError naming the variable for a wrong type or an unknown item."""
+    ParameterError naming the variable for a wrong type or an unknown item."""
     var = INTERFACE.by_name.get(name)
     if var is None:
-        raise ValueError(f'unknown parameter "{name}"')
+        raise ParameterError(f'unknown parameter "{name}"')
     if var.type == "Enumeration":
         items = enumeration(str(var.declaredType))
         if isinstance(value, str):
             if value not in items:
-                raise ValueError(f'{name} = "{value}" is not one of {", ".join(items)}')
+                raise ParameterError(f'{name} = "{value}" is not one of {", ".join(items)}')
             return items[value]
         if isinstance(value, bool) or not isinstance(value, int):
-            raise ValueError(f"{name} = {value!r} must be one of {', '.join(items)}")
+            raise ParameterError(f"{name} = {value!r} must be one of {', '.join(items)}")
         return value
     if var.type == "Boolean":
         if not isinstance(value, bool):
-            raise ValueError(f"{name} = {value!r} must be true or false")
+            raise ParameterError(f"{name} = {value!r} must be true or false")
         return value
     if var.type == "Integer":
         if isinstance(value, bool) or not isinstance(value, int):
-            raise ValueError(f"{name} = {value!r} must be an integer")
+            raise ParameterError(f"{name} = {value!r} must be an integer")
         return value
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{name} = {value!r} must be a number")
+        raise ParameterError(f"{name} = {value!r} must be a number")
     return float(value)
 
 

@@ -469,7 +469,10 @@ def load_scene(scene: str | Path) -> Scene:
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
             raise SceneError(f"{path}: no such scene file")
-        raw = path.read_bytes()
+        try:
+            raw = path.read_bytes()
+        except OSError as exc:
+            raise SceneError(f"{path}: cannot be read ({exc.strerror or exc})") from None
         try:
             text = raw.decode("utf-8")
         except UnicodeDecodeError as exc:

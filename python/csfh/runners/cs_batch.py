@@ -1,10 +1,12 @@
 """Batched co-simulation runs: many parameter sets of one scene and contact law in one call into
 the batch master (libcsfh_batch.so, fmu_src/batch/csfh_cs_batch.c).
 
-The master loads the FMU's own binary (the one `simulate_cs` loads through fmpy) and drives it
-through its fmi2 functions exactly as `simulate_cs` does: the same start values in the same order
+The master loads the FMU's own binary (the one `simulate_cs` loads) and drives it through its
+fmi2 functions exactly as `simulate_cs` does: the same start values in the same order
 (`csfh.runners.fmu.start_values`), the same tolerance, the same communication grid
-min(k h, t_end). A batched run is therefore the single run, bitwise (tested). It returns per run
+min(k h, t_end), and its contact records kept by the same bookkeeping
+(`csfh.runners.fmu.contact_bookkeeping`). A batched run is therefore the single run, bitwise
+(tested). It returns per run
 only reductions of chosen outputs over the communication points (the largest peak stress, the
 final contact count, the first onset time, ...) and, on request, the outputs on the grid; what
 it saves is Python's per-run and per-step overhead, which is most of a short run's time through
@@ -24,12 +26,24 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import SimulationError
+from ..errors import InstallError, ParameterError, SimulationError
 from ..model import model_info
 from ..model.scene import Scene
-from ..trajectory import CONTACT_FIELDS, Trajectory
+from ..trajectory import Trajectory, signals_on_grid
 from . import cs_steps
-from .fmu import CS_OUTPUT_NAMES, OUTPUT_NAMES, cs_method_name, start_values, unzipped_fmu
+from .fmu import (
+    CS_OUTPUT_NAMES,
+    EVENT_NAMES,
+    OUTPUT_NAMES,
+    binary_path,
+    check_law,
+    contact_bookkeeping,
+    cs_method_name,
+    cs_trajectory,
+    first_record,
+    start_values,
+    unzipped_fmu,
+)
 
 REDUCTIONS = {"final": 0, "max": 1, "min": 2, "absmax": 3, "first_when": 4, "time_of_max": 5}
 """Reductions over the communication points (csfh_cs_batch.h): the final value, the largest, the
@@ -57,14 +71,7 @@ SUMMARY_OUTPUTS: tuple[Output, ...] = (
 """What every batched run returns: the quantities of `Trajectory.summary` of a co-simulation
 run (contact count, first onset, largest peaks, steps) and the stress peaks with their times."""
 
-_EVENT_OUTPUTS = (
-    "contact.count",
-    "contact.active",
-    "contact.onset_time",
-    "contact.onset_speed",
-    "contact.release_time",
-    "contact.release_speed",
-)
+_EVENT_OUTPUTS = ("contact.count", "contact.active", *EVENT_NAMES)
 TABLE_OUTPUTS: tuple[str, ...] = (
     *OUTPUT_NAMES.values(),
     *CS_OUTPUT_NAMES.values(),
@@ -117,14 +124,11 @@ def library() -> Any:
 @cache
 def _binary() -> tuple[str, str, str]:
     """(path of the FMU binary for this platform, GUID, resource URI) of the unzipped FMU."""
-    from fmpy import platform, sharedLibraryExtension
-
     md = model_info.model_description()
     directory = pathlib.Path(unzipped_fmu())
-    identifier = md.coSimulation.modelIdentifier
-    binary = directory / "binaries" / platform / f"{identifier}{sharedLibraryExtension}"
+    binary = pathlib.Path(binary_path(str(directory), md.coSimulation.modelIdentifier))
     if not binary.is_file():
-        raise FileNotFoundError(f"csfh.fmu has no binary for {platform} ({binary.name})")
+        raise InstallError(f"csfh.fmu has no binary for this platform ({binary.name})")
     return str(binary), md.guid, (directory / "resources").as_uri()
 
 
@@ -205,30 +209,13 @@ class CsBatchResult:
         for column, name in (*OUTPUT_NAMES.items(), *CS_OUTPUT_NAMES.items()):
             table[column] = self.column(i, name).copy()
         count = self.column(i, "contact.count")
-        active = self.column(i, "contact.active")
-        t_on, v_on = self.column(i, "contact.onset_time"), self.column(i, "contact.onset_speed")
-        t_off = self.column(i, "contact.release_time")
-        v_off = self.column(i, "contact.release_speed")
-        records: list[list[float]] = []
-        if count[0]:
-            records.append([0.0, float(v_on[0]), math.nan, math.nan, math.nan, math.nan])
-        for k in range(1, len(count)):
-            if count[k] > count[k - 1]:
-                records.append(
-                    [float(t_on[k]), float(v_on[k]), math.nan, math.nan, math.nan, math.nan]
-                )
-            if records and not active[k] and (count[k] > count[k - 1] or active[k - 1]):
-                records[-1][2:4] = [float(t_off[k]), float(v_off[k])]
-        data = np.array(records, dtype=float).reshape(-1, len(CONTACT_FIELDS))
-        cr = {name: data[:, j].copy() for j, name in enumerate(CONTACT_FIELDS)}
-        tr = Trajectory(
-            model=self.law,
-            scene=self.scene.name,
-            table=table,
-            contacts=cr["t_onset"],
-            releases=cr["t_release"][np.isfinite(cr["t_release"])],
-            contact_records=cr,
+        active = self.column(i, "contact.active") != 0
+        events = np.column_stack([self.column(i, name) for name in EVENT_NAMES])
+        records = first_record(int(count[0]), float(events[0, 1]))
+        contact_bookkeeping(
+            records, int(count[0]), bool(active[0]), count[1:], active[1:], events[1:]
         )
+        tr = cs_trajectory(self.law, self.scene.name, table, records)
         tr.stats = {
             "integrator": f"{cs_method_name(self.scene, self.parameter_sets[i])} inside "
             f"the FMU (co-simulation, batched) rtol={self.rtol:g}, communication step "
@@ -240,6 +227,14 @@ class CsBatchResult:
         }
         return tr
 
+    def signals(self, i: int, grid: np.ndarray) -> dict[str, np.ndarray]:
+        """Run i's output signals on `grid` (needs records), as a single run's."""
+        return signals_on_grid(self.trajectory(i), grid)
+
+    def run_time(self, i: int) -> float:
+        """The share of one run in the batch's wall time."""
+        return self.wall_time / max(1, len(self))
+
     def check(self) -> None:
         """Raise SimulationError for the first failed run, naming its parameters."""
         bad = np.flatnonzero(self.status < 0)
@@ -249,6 +244,116 @@ class CsBatchResult:
                 f"{self.law}: run {i} of the batch failed ({self.messages[i] or 'no message'}) "
                 f"with parameters {self.parameter_sets[i] or {}}"
             )
+
+
+def _vr_type(name: str) -> tuple[int, int]:
+    """The value reference and the master's type number of an FMU variable."""
+    variables = model_info.variables()
+    if name not in variables:
+        raise ParameterError(f"unknown FMU variable {name!r}")
+    v = variables[name]
+    return v.valueReference, _TYPES.get(v.type, 1)
+
+
+def _output_spec(outs: Sequence[Output]) -> tuple[list[int], ...]:
+    """The outputs' value references, types, reductions and trigger indices, checked."""
+    names = [o[0] for o in outs]
+    for o in outs:
+        if o[1] not in REDUCTIONS or (o[1] == "first_when") != (len(o) == 3):
+            raise ParameterError(
+                f"bad output {o!r}: (name, reduction) or (name, 'first_when', trigger)"
+            )
+        if len(o) == 3 and o[2] not in names:
+            raise ParameterError(f"{o!r}: the trigger must be one of the outputs")
+    return (
+        [_vr_type(n)[0] for n in names],
+        [_vr_type(n)[1] for n in names],
+        [REDUCTIONS[o[1]] for o in outs],
+        [names.index(o[2]) if len(o) == 3 else 0 for o in outs],
+    )
+
+
+def _start_values(
+    scene: Scene, law: str, parameter_sets: Sequence[dict[str, Any] | None]
+) -> tuple[list[int], list[int], np.ndarray]:
+    """The value references and types every run sets, and each run's values (one row each):
+    every run must set the same variables in the same order (one spec per batch)."""
+    rows = [start_values(scene, law, p) for p in parameter_sets]
+    first = rows[0] if rows else start_values(scene, law)
+    order = [(name, kind) for name, kind, _ in first]
+    for k, row in enumerate(rows):
+        if [(name, kind) for name, kind, _ in row] != order:
+            raise ParameterError(f"parameter set {k} sets other variables than parameter set 0")
+    values = np.array([[float(v) for _, _, v in row] for row in rows], dtype=float)
+    return (
+        [_vr_type(name)[0] for name, _ in order],
+        [_TYPES[kind] for _, kind in order],
+        np.ascontiguousarray(values.reshape(len(rows), len(order))),
+    )
+
+
+def _array(ctype: Any, data: Sequence[int]) -> Any:
+    return (ctype * max(1, len(data)))(*data)
+
+
+def _spec(
+    rtol: float,
+    t_end: float,
+    h: float,
+    sets: tuple[list[int], list[int]],
+    outputs: tuple[list[int], ...],
+) -> _Spec:
+    binary, guid, resources = _binary()
+    (set_vr, set_type), (out_vr, out_type, out_reduce, out_arg) = sets, outputs
+    return _Spec(
+        binary.encode(),
+        guid.encode(),
+        resources.encode(),
+        b"csfh",
+        float(rtol),
+        float(t_end),
+        float(h),
+        len(set_vr),
+        _array(c_uint, set_vr),
+        _array(c_int, set_type),
+        len(out_vr),
+        _array(c_uint, out_vr),
+        _array(c_int, out_type),
+        _array(c_int, out_reduce),
+        _array(c_int, out_arg),
+    )
+
+
+def _run_master(
+    spec: _Spec, values: np.ndarray, n_out: int, n_points: int, record: bool
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, list[str], float]:
+    """One call into the batch master: (results, records, status, messages, wall time)."""
+    n = len(values)
+    results = np.full((n, n_out), np.nan)
+    records = np.zeros((n, n_points, n_out)) if record else None
+    status = np.zeros(n, dtype=np.int32)
+    messages = ctypes.create_string_buffer(max(1, n) * MESSAGE_SIZE)
+    dp = POINTER(c_double)
+    wall = time.perf_counter()
+    failed = library().csfh_cs_batch_run(
+        ctypes.byref(spec),
+        n,
+        values.ctypes.data_as(dp),
+        results.ctypes.data_as(dp),
+        records.ctypes.data_as(dp) if records is not None else None,
+        status.ctypes.data_as(POINTER(c_int)),
+        messages,
+        MESSAGE_SIZE,
+    )
+    wall = time.perf_counter() - wall
+    raw = messages.raw
+    texts = [
+        raw[i * MESSAGE_SIZE : (i + 1) * MESSAGE_SIZE].split(b"\0", 1)[0].decode(errors="replace")
+        for i in range(max(1, n))
+    ]
+    if failed < 0:
+        raise RuntimeError(texts[0] or "csfh_cs_batch_run rejected its arguments")
+    return results, records, status, texts[:n], wall
 
 
 def cs_batch(
@@ -267,102 +372,24 @@ def cs_batch(
     parameters, as `simulate_cs(scene, law, parameters=...)` takes them), all in one call into
     the batch master. `outputs` are reduced over the communication points; with `record` every
     output of `outputs` + TABLE_OUTPUTS is kept at every point (`CsBatchResult.trajectory`).
-    Invalid parameter values raise ValueError before anything runs; a run the FMU refuses or
-    fails has status -1 and NaN results (with `check`, SimulationError)."""
-    if law not in model_info.LAWS:
-        raise ValueError(f"law {law!r} is not an event-driven law ({', '.join(model_info.LAWS)})")
+    Invalid parameter values raise ParameterError before anything runs; a run the FMU refuses
+    or fails has status -1 and NaN results (with `check`, SimulationError)."""
+    check_law(law)
     rtol = scene.integrator.rtol if rtol is None else rtol
     h = scene.integrator.output_interval if communication_step is None else communication_step
     t_end = scene.stop_time if stop_time is None else stop_time
     outs: list[Output] = list(outputs)
     if record:
         outs += [(name, "final") for name in TABLE_OUTPUTS if (name, "final") not in outs]
-    variables = model_info.variables()
-
-    def vr_type(name: str) -> tuple[int, int]:
-        if name not in variables:
-            raise ValueError(f"unknown FMU variable {name!r}")
-        v = variables[name]
-        return v.valueReference, _TYPES.get(v.type, 1)
-
-    for out in outs:
-        if out[1] not in REDUCTIONS or (out[1] == "first_when") != (len(out) == 3):
-            raise ValueError(
-                f"bad output {out!r}: (name, reduction) or (name, 'first_when', trigger)"
-            )
-    names = [o[0] for o in outs]
-    out_vr = [vr_type(n)[0] for n in names]
-    out_type = [vr_type(n)[1] for n in names]
-    out_reduce = [REDUCTIONS[o[1]] for o in outs]
-    out_arg = [names.index(o[2]) if len(o) == 3 else 0 for o in outs]
-    for o in outs:
-        if len(o) == 3 and o[2] not in names:
-            raise ValueError(f"{o!r}: the trigger must be one of the outputs")
-
-    rows = [start_values(scene, law, p) for p in parameter_sets]
-    first = rows[0] if rows else start_values(scene, law)
-    order = [(name, kind) for name, kind, _ in first]
-    for k, row in enumerate(rows):
-        if [(name, kind) for name, kind, _ in row] != order:
-            # every run must set the same variables in the same order (one spec per batch)
-            raise ValueError(f"parameter set {k} sets other variables than parameter set 0")
-    set_vr = [vr_type(name)[0] for name, _ in order]
-    set_type = [_TYPES[kind] for _, kind in order]
-    n = len(rows)
-    values = np.array([[float(v) for _, _, v in row] for row in rows], dtype=float).reshape(
-        n, len(order)
-    )
-    binary, guid, resources = _binary()
-    lib = library()
-    n_points = int(lib.csfh_cs_batch_points(t_end, h))
+    out_spec = _output_spec(outs)
+    set_vr, set_type, values = _start_values(scene, law, parameter_sets)
+    n_points = int(library().csfh_cs_batch_points(t_end, h))
     if n_points < 1:
-        raise ValueError(f"bad horizon {t_end!r} s or communication step {h!r} s")
-
-    def arr(ctype: Any, data: Sequence[int]) -> Any:
-        return (ctype * max(1, len(data)))(*data)
-
-    spec = _Spec(
-        binary.encode(),
-        guid.encode(),
-        resources.encode(),
-        b"csfh",
-        float(rtol),
-        float(t_end),
-        float(h),
-        len(order),
-        arr(c_uint, set_vr),
-        arr(c_int, set_type),
-        len(outs),
-        arr(c_uint, out_vr),
-        arr(c_int, out_type),
-        arr(c_int, out_reduce),
-        arr(c_int, out_arg),
+        raise ParameterError(f"bad horizon {t_end!r} s or communication step {h!r} s")
+    spec = _spec(rtol, t_end, h, (set_vr, set_type), out_spec)
+    results, records, status, messages, wall = _run_master(
+        spec, values, len(outs), n_points, record
     )
-    values = np.ascontiguousarray(values)
-    results = np.full((n, len(outs)), np.nan)
-    records = np.zeros((n, n_points, len(outs))) if record else None
-    status = np.zeros(n, dtype=np.int32)
-    messages = ctypes.create_string_buffer(max(1, n) * MESSAGE_SIZE)
-    dp = POINTER(c_double)
-    wall = time.perf_counter()
-    failed = lib.csfh_cs_batch_run(
-        ctypes.byref(spec),
-        n,
-        values.ctypes.data_as(dp),
-        results.ctypes.data_as(dp),
-        records.ctypes.data_as(dp) if records is not None else None,
-        status.ctypes.data_as(POINTER(c_int)),
-        messages,
-        MESSAGE_SIZE,
-    )
-    wall = time.perf_counter() - wall
-    raw = messages.raw
-    texts = [
-        raw[i * MESSAGE_SIZE : (i + 1) * MESSAGE_SIZE].split(b"\0", 1)[0].decode(errors="replace")
-        for i in range(max(1, n))
-    ]
-    if failed < 0:
-        raise RuntimeError(texts[0] or "csfh_cs_batch_run rejected its arguments")
     result = CsBatchResult(
         scene=scene,
         law=law,
@@ -373,7 +400,7 @@ def cs_batch(
         records=records,
         times=grid_times(t_end, h),
         status=status,
-        messages=texts[:n],
+        messages=messages,
         wall_time=wall,
         parameter_sets=list(parameter_sets),
     )

@@ -1,30 +1,31 @@
 """The communication loop of `simulate_cs` in C: fmi2DoStep and the reads of fixed sets of
 outputs for a chunk of communication steps in one ctypes call (csfh_cs_steps in the batch library
-libcsfh_batch.so, fmu_src/batch/csfh_cs_steps.c), on the instance fmpy created.
+libcsfh_batch.so, fmu_src/batch/csfh_cs_steps.c), on our instance of the FMU
+(`fmi2_slave.Fmi2Slave`: the addresses of its binary's fmi2 functions and of the instance).
 
 From Python, every FMI call through ctypes costs about 1 us beyond the FMU's own work (the call,
 and the FMU's code and data no longer in the caches after the interpreter's work between calls):
 on a fine communication grid, or on a run of few steps timed against a compiled integrator, that
 is most of the time. Here Python pays one call per chunk of steps. The grid is simulate_cs's,
-computed the same way (t_next = min((k + 1) h, t_end), steps t_next - t), so the results are
-those of the Python loop, bitwise (tests/package/test_cs_steps.py)."""
+computed the same way as Python would (t_next = min((k + 1) h, t_end), steps t_next - t): the
+tests compare it with a loop in Python, bitwise (tests/package/test_cs_steps.py)."""
 
 from __future__ import annotations
 
 import ctypes
 from collections.abc import Sequence
 from ctypes import POINTER, Structure, c_double, c_int, c_longlong, c_size_t, c_uint, c_void_p
-from ctypes import cast as ctypes_cast
 from dataclasses import dataclass
 from functools import cache
 from time import perf_counter
 from typing import Any
 
 import numpy as np
-from fmpy.fmi1 import FMICallException
 
 from .. import paths
+from ..errors import InstallError
 from ..model._csfh_variables import BATCH_ABI_VERSION as ABI_VERSION
+from .fmi2_slave import FmiCallError
 
 _CALLS = ("fmi2DoStep", "fmi2GetReal", "fmi2GetInteger", "fmi2GetBoolean")
 """The calls csfh_cs_steps reports as failed (CSFH_STEPS_DO_STEP .. _GET_BOOLEAN)."""
@@ -55,7 +56,7 @@ def library() -> Any:
     lib = ctypes.CDLL(str(paths.batch_library_path()))
     lib.csfh_cs_batch_abi_version.restype = c_int
     if lib.csfh_cs_batch_abi_version() != ABI_VERSION:
-        raise RuntimeError(
+        raise InstallError(
             f"{paths.batch_library_path()} has ABI version {lib.csfh_cs_batch_abi_version()}, this "
             f"package needs {ABI_VERSION}: rebuild or reinstall csfh"
         )
@@ -75,7 +76,7 @@ def library() -> Any:
 
 
 def available() -> bool:
-    """Whether the batch library is there (a build without it: simulate_cs loops in Python)."""
+    """Whether the batch library is there."""
     try:
         paths.batch_library_path()
     except FileNotFoundError:
@@ -96,9 +97,9 @@ class Chunk:
 
 
 class CSteps:
-    """Chunks of communication steps of an instantiated, initialised fmpy FMU2Slave (which stays
-    the owner of the instance) on the grid min((k + 1) h, t_end), reading fixed value references
-    after every step."""
+    """Chunks of communication steps of an instantiated, initialised instance (which stays the
+    owner of the instance: `address(name)` of its fmi2 functions, `component`) on the grid
+    min((k + 1) h, t_end), reading fixed value references after every step."""
 
     def __init__(
         self,
@@ -110,11 +111,7 @@ class CSteps:
         booleans: Sequence[int] = (),
     ) -> None:
         self._lib = library()
-        dll = slave.dll
-
-        def address(name: str) -> int:
-            return ctypes_cast(getattr(dll, name), c_void_p).value or 0
-
+        address = slave.address
         self._refs = [(c_uint * len(r))(*r) for r in (reals, integers, booleans)]
         self._loop = _Loop(
             address("fmi2DoStep"),
@@ -152,7 +149,7 @@ class CSteps:
 
     def run(self, k_first: int, k_last: int, t: float) -> Chunk:
         """Steps k_first .. k_last - 1 from time t (the grid time before step k_first). Raises
-        fmpy's FMICallException for a call that returned fmi2Error or worse, with `t` (the time
+        FmiCallError for a call that returned fmi2Error or worse, with `t` (the time
         the failed step started from, or reached if reading its outputs failed) and `chunk` (the
         steps before it) attached."""
         m = k_last - k_first
@@ -178,10 +175,15 @@ class CSteps:
         )
         call, status = self._failure
         if call >= 0:
-            exc = FMICallException(function=_CALLS[call], status=status)
             reached = call > 0  # fmi2DoStep went through, reading its outputs failed
-            exc.t = (
-                float(self._times[done]) if reached else float(self._times[done - 1]) if done else t
+            exc = FmiCallError(
+                _CALLS[call],
+                status,
+                float(self._times[done])
+                if reached
+                else float(self._times[done - 1])
+                if done
+                else t,
             )
             exc.chunk = chunk
             raise exc

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import ParameterError, SimulationError
 from ..model._csfh_variables import MOREAU_V_STICK
 from ..model.core import N_STATES, library
 from ..model.instance import core_model
@@ -69,22 +70,22 @@ _STATS = (
 def step_counts(t_end: float, h: float, dt_out: float) -> tuple[int, int, int]:
     """(steps, steps per output row, rows to allocate) of a Moreau run, within the limits of a
     scene (csfh.model.scene: at least one step, at most MAX_MOREAU_STEPS steps and
-    MAX_OUTPUT_SAMPLES rows); ValueError naming the values otherwise."""
+    MAX_OUTPUT_SAMPLES rows); ParameterError naming the values otherwise."""
     for name, value in (("stop_time", t_end), ("h", h), ("output_interval", dt_out)):
         if not (value > 0 and math.isfinite(value)):
-            raise ValueError(f"Moreau: {name} = {value!r} must be a finite number > 0")
+            raise ParameterError(f"Moreau: {name} = {value!r} must be a finite number > 0")
     if not t_end / h <= MAX_MOREAU_STEPS:
-        raise ValueError(
+        raise ParameterError(
             f"Moreau: h = {h:g} s gives {t_end / h:.3g} steps over {t_end:g} s; at most "
             f"{MAX_MOREAU_STEPS:g}"
         )
     n_steps = round(t_end / h)
     if n_steps < 1:
-        raise ValueError(f"Moreau: h = {h:g} s is longer than the run ({t_end:g} s)")
+        raise ParameterError(f"Moreau: h = {h:g} s is longer than the run ({t_end:g} s)")
     record_every = max(1, round(dt_out / h))
     max_records = n_steps // record_every + 2
     if max_records > MAX_OUTPUT_SAMPLES + 2:
-        raise ValueError(
+        raise ParameterError(
             f"Moreau: output_interval = {dt_out:g} s gives {max_records - 2} rows; at most "
             f"{MAX_OUTPUT_SAMPLES:g}"
         )
@@ -113,9 +114,9 @@ def moreau(
     h = scene.integrator.moreau_h if h is None else h
     rule = scene.stick_rule if stick_rule is None else stick_rule
     if rule not in STICK_RULES:
-        raise ValueError(f"stick_rule = {rule!r} is not one of {', '.join(STICK_RULES)}")
+        raise ParameterError(f"stick_rule = {rule!r} is not one of {', '.join(STICK_RULES)}")
     if not (h > 0 and math.isfinite(h)):
-        raise ValueError(f"h = {h!r} must be a positive step")
+        raise ParameterError(f"h = {h!r} must be a positive step")
     t_end = scene.stop_time if stop_time is None else stop_time
     dt_out = scene.integrator.output_interval if output_interval is None else output_interval
     n_steps, record_every, max_records = step_counts(t_end, h, dt_out)
@@ -151,7 +152,7 @@ def moreau(
     wall = time.perf_counter() - wall
     st = dict(zip(_STATS, (int(v) for v in stats), strict=True))
     if status != 0:
-        raise FloatingPointError(
+        raise SimulationError(
             f"Moreau: non-finite state after {st['steps']} steps "
             f"(t = {st['steps'] * h:.6g} s); reduce h"
         )

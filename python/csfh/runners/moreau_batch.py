@@ -18,11 +18,12 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import ParameterError, SimulationError
 from ..model._csfh_variables import MOREAU_V_STICK
 from ..model.core import N_STATES, CoreModel, library
 from ..model.instance import core_model
 from ..model.scene import Scene
-from ..trajectory import Trajectory
+from ..trajectory import SIGNALS, Trajectory
 from .moreau import _IMPACT, _RECORD, _STATS, STICK_RULES, step_counts, trajectory_from_buffers
 
 _dp = POINTER(c_double)
@@ -91,6 +92,36 @@ class BatchResult:
     def impact_times(self, i: int) -> np.ndarray:
         return self.impacts[i, : self.n_impacts(i), _IMPACT.index("t")]
 
+    def summary(self, i: int) -> dict[str, Any]:
+        """Variant i as `Trajectory.summary` reports it: the first impact, the contact onsets,
+        the largest F_N and abs(F_T) of its output rows (impulse / h), its steps."""
+        t_imp = self.impact_times(i)
+        return {
+            "first_contact_time": float(t_imp[0]) if len(t_imp) else None,
+            "contacts": int(self.stats[i, _STATS.index("onsets")]),
+            "max_F_N": float(np.max(self.column(i, "F_N"))),
+            "max_abs_F_T": float(np.max(np.abs(self.column(i, "F_T")))),
+            "steps": int(self.stats[i, _STATS.index("steps")]),
+        }
+
+    def signals(self, i: int, grid: np.ndarray) -> dict[str, np.ndarray]:
+        """Variant i's SIGNALS on `grid`, interpolated: its F_N and F_T rows are already the
+        largest per-step values of each output interval."""
+        t = self.column(i, "t")
+        return {name: np.interp(grid, t, self.column(i, name)) for name in SIGNALS}
+
+    def run_time(self, i: int) -> float:
+        """The share of one variant in the batch's wall time."""
+        return self.wall_time / max(1, len(self))
+
+    def check(self, parameter_sets: Sequence[dict[str, Any] | None]) -> None:
+        """SimulationError for the first variant whose state became non-finite, naming its
+        parameters."""
+        bad = np.flatnonzero(self.status != 0)
+        if len(bad):
+            overrides = parameter_sets[int(bad[0])] or {}
+            raise SimulationError(f"Moreau: non-finite state for parameters {overrides}; reduce h")
+
     def trajectory(self, i: int) -> Trajectory:
         """Variant i as the Trajectory csfh.moreau would have returned."""
         st = {name: int(v) for name, v in zip(_STATS, self.stats[i], strict=True)}
@@ -120,9 +151,9 @@ def moreau_batch(
     h = scene.integrator.moreau_h if h is None else h
     rule = scene.stick_rule if stick_rule is None else stick_rule
     if rule not in STICK_RULES:
-        raise ValueError(f"stick_rule = {rule!r} is not one of {', '.join(STICK_RULES)}")
+        raise ParameterError(f"stick_rule = {rule!r} is not one of {', '.join(STICK_RULES)}")
     if not (h > 0 and math.isfinite(h)):
-        raise ValueError(f"h = {h!r} must be a positive step")
+        raise ParameterError(f"h = {h!r} must be a positive step")
     t_end = scene.stop_time if stop_time is None else stop_time
     dt_out = scene.integrator.output_interval if output_interval is None else output_interval
     n_steps, record_every, max_records = step_counts(t_end, h, dt_out)

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import ParameterError, SimulationError
 from ..model._csfh_variables import RK4_H0, RK4_TOL
 from ..model.core import N_STATES, library
 from ..model.instance import core_model
@@ -50,7 +51,7 @@ def rk4_event(
 ) -> Trajectory:
     """Run the paper's RK4 + bisection scheme with contact law `law` on `scene`."""
     if not (h0 > 0 and tol > 0):
-        raise ValueError(f"h0 = {h0!r} and tol = {tol!r} must be > 0")
+        raise ParameterError(f"h0 = {h0!r} and tol = {tol!r} must be > 0")
     t_end = scene.stop_time if stop_time is None else stop_time
     dt_out = scene.integrator.output_interval if output_interval is None else output_interval
     h_min = h0 * 2.0**-40 if h_min is None else h_min
@@ -85,7 +86,7 @@ def rk4_event(
     wall = time.perf_counter() - wall
     st: dict[str, Any] = dict(zip(_STATS, (int(v) for v in stats), strict=True))
     if status != 0:
-        raise FloatingPointError(
+        raise SimulationError(
             f"RK4 (h0 = {h0:g} s): non-finite state after {st['steps']} "
             "steps; the step is beyond the stability limit of the contact"
         )

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import ResultsError
 from ..model.instance import clearance
 from ..model.scene import Scene, load_scene
 from ..output import check_set, output_set, read_table, write_json, write_table
@@ -94,13 +95,13 @@ def title(scene: str, description: str) -> str:
 
 def read_comparison(out: Path) -> tuple[dict[str, Any], list[Trajectory]]:
     """The summary and the runs of an output directory of `compare`: each model's table, its
-    per-step records where they were written, and its contact onsets. Raises ValueError naming
-    the file that is missing or unreadable."""
+    per-step records where they were written, and its contact onsets. Raises ResultsError
+    naming the file that is missing or unreadable."""
     out = Path(out)
     path = out / SUMMARY
     check_set(out, OUTPUT_SET, [SUMMARY], "csfh compare")  # and completes an interrupted commit
     if not path.is_file():
-        raise ValueError(
+        raise ResultsError(
             f"{out}: no {SUMMARY} here; csfh plot reads the output directory of csfh compare"
         )
     try:
@@ -108,15 +109,17 @@ def read_comparison(out: Path) -> tuple[dict[str, Any], list[Trajectory]]:
         models = list(summary["models"])
         scene = str(summary["scene"])
         float(summary["clearance"])
+    except OSError as exc:
+        raise ResultsError(f"{path}: cannot be read ({exc.strerror or exc})") from None
     except (ValueError, KeyError, TypeError) as exc:
-        raise ValueError(f"{path}: not a summary written by csfh compare ({exc})") from None
+        raise ResultsError(f"{path}: not a summary written by csfh compare ({exc})") from None
     names = [*(f"{m}.csv" for m in models), *(f"{m}.steps.csv" for m in models)]
     check_set(out, OUTPUT_SET, names, "csfh compare")
     runs = []
     for model in models:
         table = out / f"{model}.csv"
         if not table.is_file():
-            raise ValueError(f"{table}: missing (listed in {path})")
+            raise ResultsError(f"{table}: missing (listed in {path})")
         tr = Trajectory.read_csv(table, model=model, scene=scene)
         tr.contacts = np.asarray(summary.get("contacts", {}).get(model, []), dtype=float)
         steps = out / f"{model}.steps.csv"

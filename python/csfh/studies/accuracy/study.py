@@ -48,9 +48,7 @@ import numpy as np
 from ...model import model_info
 from ...model.scene import Scene
 from ...progress import Progress
-from ...runners.fmu import simulate_cs, simulate_me
-from ...runners.moreau import moreau
-from ...runners.rk4 import rk4_event
+from ...runners.registry import run
 from ...trajectory import Trajectory
 from .metrics import (
     COMPLIANT,
@@ -149,8 +147,8 @@ def run_study(
     for model in models:
         if model not in COMPLIANT:
             continue
-        ref = simulate_me(sc, model, rtol=ref_rtol, output_times=grid)
-        half = simulate_me(sc, model, rtol=ref_rtol / 2, output_times=grid)
+        ref = run(sc, model, "me", rtol=ref_rtol, output_times=grid)
+        half = run(sc, model, "me", rtol=ref_rtol / 2, output_times=grid)
         refs[model] = ref
         study.references[model] = f"ME CVode rtol {ref_rtol:g} (check: {ref_rtol / 2:g})"
         study.reference_checks[model] = _reference_change(half, ref, t_end, radius)
@@ -161,14 +159,15 @@ def run_study(
                 )
                 step()
     if "Moreau" in models:
-        ref = moreau(sc, h=ref_moreau_h, output_interval=sc.integrator.output_interval)
-        half = moreau(sc, h=ref_moreau_h / 2, output_interval=sc.integrator.output_interval)
+        dt = sc.integrator.output_interval
+        ref = run(sc, "Moreau", "core", h=ref_moreau_h, output_interval=dt)
+        half = run(sc, "Moreau", "core", h=ref_moreau_h / 2, output_interval=dt)
         study.references["Moreau"] = f"Moreau h = {ref_moreau_h:g} s (check: {ref_moreau_h / 2:g})"
         change = _reference_change(half, ref, t_end, radius)
         study.reference_checks["Moreau"] = {m: change[m] for m in RIGID_METRICS}
         compliant_ref = refs.get("LN_spheres")
         for h in settings.get("Moreau", []):
-            tr, wall = _median_run(partial(moreau, sc, h=h), repeats)
+            tr, wall = _median_run(partial(run, sc, "Moreau", "core", h=h), repeats)
             study.points.append(
                 _point(
                     "Moreau",
@@ -208,7 +207,7 @@ def run_study(
 def default_horizon(scene: Scene) -> float:
     """Long enough for the first three contacts (the end of the third, plus 20 %), at most the
     scene's stop time: the metrics look no further, and the Moreau reference costs 1/h steps."""
-    probe = simulate_me(scene, "LN_spheres", rtol=1e-8)
+    probe = run(scene, "LN_spheres", "me", rtol=1e-8)
     ends = probe.contact_records["t_release"]
     ends = ends[np.isfinite(ends)]
     if len(ends) >= 3:
@@ -238,7 +237,7 @@ def _measure(
 ) -> Point:
     if integ == "ME":
         tr, wall = _median_run(
-            lambda: simulate_me(sc, model, rtol=setting, output_times=grid), repeats
+            lambda: run(sc, model, "me", rtol=setting, output_times=grid), repeats
         )
         return _point(model, "ME", setting, f"rtol = {setting:g}", tr, wall, ref, t_end, radius)
     if integ in CS_METHODS:
@@ -246,9 +245,10 @@ def _measure(
         numbers = model_info.enumeration("SolverMethod")
         parameters = None if method is None else {"solver.method": numbers[method]}
         tr, _ = _median_run(
-            lambda: simulate_cs(
+            lambda: run(
                 sc,
                 model,
+                "cs",
                 rtol=setting,
                 communication_step=CS_COMMUNICATION_STEP,
                 parameters=parameters,
@@ -269,9 +269,9 @@ def _measure(
             ("contact_time", "rebound_velocity", "trajectory"),
         )
     h0, tol = setting
-    tr, wall = _median_run(lambda: rk4_event(sc, model, h0=h0, tol=tol), repeats)
+    tr, wall = _median_run(lambda: run(sc, model, "rk4", h0=h0, tol=tol), repeats)
     # the scheme has no dense output: the reference is evaluated at its own record times
-    ref_here = simulate_me(sc, model, rtol=ref_rtol, output_times=tr.t)
+    ref_here = run(sc, model, "me", rtol=ref_rtol, output_times=tr.t)
     ref_here.contact_records = ref.contact_records
     return _point(
         model, "RK4", h0, f"h0 = {h0:g} s, tol = {tol:g} m", tr, wall, ref_here, t_end, radius

@@ -22,6 +22,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ...errors import ParameterError
+
 G_STANDARD = 9.80665
 """m/s^2: the unit g of shock specifications (standard gravity)."""
 
@@ -77,19 +79,19 @@ DEFAULT_CONDITION = "JESD22-B104-B"
 
 
 def condition(name: str) -> Pulse:
-    """A standard condition by name (case-insensitive); ValueError naming the known ones."""
+    """A standard condition by name (case-insensitive); ParameterError naming the known ones."""
     for key, pulse in CONDITIONS.items():
         if key.lower() == name.strip().lower():
             return pulse
-    raise ValueError(f"unknown shock condition {name!r} (known: {', '.join(CONDITIONS)})")
+    raise ParameterError(f"unknown shock condition {name!r} (known: {', '.join(CONDITIONS)})")
 
 
 def pulse(peak_g: float, duration: float) -> Pulse:
-    """A pulse by its numbers; ValueError naming the bad one."""
+    """A pulse by its numbers; ParameterError naming the bad one."""
     if not (math.isfinite(peak_g) and peak_g > 0):
-        raise ValueError(f"shock peak = {peak_g!r} g must be a finite number > 0")
+        raise ParameterError(f"shock peak = {peak_g!r} g must be a finite number > 0")
     if not (math.isfinite(duration) and duration > 0):
-        raise ValueError(f"shock duration = {duration!r} s must be a finite number > 0")
+        raise ParameterError(f"shock duration = {duration!r} s must be a finite number > 0")
     return Pulse(peak_g, duration, "", "given on the command line")
 
 

@@ -25,6 +25,7 @@ import numpy as np
 
 from ...batch.store import ResultStore
 from ...batch.tasks import Task
+from ...errors import ParameterError
 from ...model import model_info
 from ...model.instance import nominal_values
 from ...model.scene import Scene
@@ -304,7 +305,7 @@ def check_models(models: Sequence[str]) -> tuple[str, ...]:
     """The event-driven models of a shock study (Moreau has no stress peaks: refused)."""
     for m in models:
         if m not in model_info.LAWS:
-            raise ValueError(
+            raise ParameterError(
                 f"model {m!r} is not an event-driven model (shock: {', '.join(model_info.LAWS)})"
             )
     return tuple(dict.fromkeys(models))

@@ -26,12 +26,10 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import SimulationError
+from ...errors import ParameterError, SimulationError
 from ...model import model_info
 from ...progress import Progress
-from ...runners.fmu import simulate_cs, simulate_me
-from ...runners.moreau import moreau
-from ...runners.rk4 import rk4_event
+from ...runners.registry import run
 from ...trajectory import Trajectory
 from .cases import Case
 from .oracles import M1, MOREAU_STEP, RK4_H0, RK4_TOL, RTOL
@@ -39,6 +37,24 @@ from .oracles import M1, MOREAU_STEP, RK4_H0, RK4_TOL, RTOL
 ENERGY_RTOL = 1e4 * RTOL  # allowed numerical energy gain of ME/CS, relative to the energy scale
 CS_METHODS: dict[str, str | None] = {"CS": None, "CS-RK45": "RK45"}
 """The co-simulation integrators: their solver.method (None: the FMU's default, auto)."""
+
+
+def _cs(method: str | None) -> dict[str, Any]:
+    parameters = (
+        None
+        if method is None
+        else {"solver.method": model_info.enumeration("SolverMethod")[method]}
+    )
+    return {"rtol": RTOL, "communication_step": 1e-3, "parameters": parameters}
+
+
+INTEGRATORS: dict[str, tuple[str, dict[str, Any]]] = {
+    "ME": ("me", {"rtol": RTOL}),
+    **{name: ("cs", _cs(method)) for name, method in CS_METHODS.items()},
+    "RK4": ("rk4", {"h0": RK4_H0, "tol": RK4_TOL}),
+    "Moreau": ("core", {"h": MOREAU_STEP}),
+}
+"""Each integrator of the suite: its runner's interface and options (csfh.runners.registry)."""
 
 
 @dataclass
@@ -53,25 +69,11 @@ class Run:
 
 
 def _run_one(case: Case, model: str, integ: str) -> tuple[Trajectory | None, str | None, float]:
+    interface, options = INTEGRATORS[integ]
     t0 = time.perf_counter()
     try:
-        if model == "Moreau":
-            tr = moreau(case.scene, h=MOREAU_STEP)
-        elif integ == "ME":
-            tr = simulate_me(case.scene, model, rtol=RTOL)
-        elif integ in CS_METHODS:
-            method = CS_METHODS[integ]
-            parameters = (
-                None
-                if method is None
-                else {"solver.method": model_info.enumeration("SolverMethod")[method]}
-            )
-            tr = simulate_cs(
-                case.scene, model, rtol=RTOL, communication_step=1e-3, parameters=parameters
-            )
-        else:
-            tr = rk4_event(case.scene, model, h0=RK4_H0, tol=RK4_TOL)
-    except (SimulationError, FloatingPointError, ValueError) as exc:
+        tr = run(case.scene, model, interface, **options)
+    except (SimulationError, ParameterError) as exc:
         return None, str(exc), time.perf_counter() - t0
     return tr, None, time.perf_counter() - t0
 

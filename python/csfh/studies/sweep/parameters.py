@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ...batch.tasks import SIGNALS
+from ...trajectory import SIGNALS
 
 OUTPUTS = SIGNALS
 FORCES = ("F_N", "F_T")

@@ -193,7 +193,12 @@ def _read(arg: str | Path) -> tuple[dict[str, Any], str]:
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
             raise ToleranceError(f"{path}: no such tolerance file")
-        text, source = path.read_text(encoding="utf-8"), str(path)
+        try:
+            text, source = path.read_text(encoding="utf-8"), str(path)
+        except UnicodeDecodeError:
+            raise ToleranceError(f"{path}: not UTF-8 text (TOML files are UTF-8)") from None
+        except OSError as exc:
+            raise ToleranceError(f"{path}: cannot be read ({exc.strerror or exc})") from None
     else:
         builtin = _builtin_text(str(arg)) if "/" not in str(arg) else None
         if builtin is None:

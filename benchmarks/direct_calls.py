@@ -1,4 +1,6 @@
-"""The FMI calls of a co-simulation loop straight through ctypes, with preallocated buffers.
+"""The FMI calls of a loop straight through ctypes, with preallocated buffers, on an fmpy
+instance: what the benchmarks time as "a direct ctypes call" (bench_cosim.py), apart from the
+package, which runs its loops in C (csfh.runners.cs_steps).
 
 fmpy's wrappers (FMU2Slave.doStep, getReal, ...) build new ctypes arrays and check and log on
 every call: about 6-9 us each from Python, more than the FMU needs for a communication step of a
@@ -11,7 +13,7 @@ instance directly, reading fixed sets of value references into reused buffers (a
 from __future__ import annotations
 
 from collections.abc import Sequence
-from ctypes import c_double, c_int, c_size_t, c_uint, c_void_p
+from ctypes import c_double, c_int, c_size_t, c_uint, c_void_p, cast
 from typing import Any
 
 from fmpy.fmi1 import FMICallException
@@ -47,7 +49,8 @@ class _Reader:
 
 
 class DirectCalls:
-    """Direct calls on an instantiated fmpy FMU2Slave (which stays the owner of the instance)."""
+    """Direct calls on an instantiated fmpy FMU2Slave or FMU2Model (which stays the owner of the
+    instance). `address` and `component` are what csfh.runners.cs_steps.CSteps takes."""
 
     def __init__(self, slave: Any) -> None:
         self._dll = slave.dll
@@ -55,6 +58,14 @@ class DirectCalls:
         self._do_step = _function(self._dll, "fmi2DoStep")
         self._true = c_int(1)
         self._t, self._h = c_double(), c_double()  # reused: cheaper than new ones per call
+
+    @property
+    def component(self) -> int:
+        return self._component.value or 0
+
+    def address(self, name: str) -> int:
+        """The address of an fmi2 function of the instance's binary."""
+        return cast(getattr(self._dll, name), c_void_p).value or 0
 
     def do_step(self, t: float, h: float) -> None:
         """fmi2DoStep(t, h); raises fmpy's FMICallException on fmi2Error or worse (the FMU's
