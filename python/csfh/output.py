@@ -44,9 +44,16 @@ import numpy as np
 
 from .errors import ResultsError, file_errors
 
+RESULTS = Path("results")
+"""Where a command writes when it is given no output directory: results/<scene, ...>."""
 CSV_DIGITS = 10
 """Significant digits of the numbers in a CSV table."""
 _HEADER_FIELD = re.compile(r"^\s*(?P<name>[^\[\]]+?)\s*(?:\[(?P<unit>[^\[\]]*)\])?\s*$")
+
+
+def results_dir(out: str | Path | None, *default: str) -> Path:
+    """The output directory: `out` when given, else results/<default...>."""
+    return Path(out) if out else RESULTS.joinpath(*default)
 
 
 # ------------------------------------------------------------------------------------------

@@ -6,40 +6,23 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from .common import (
-    SCENE_HELP,
-    CliError,
-    add_command,
-    add_quiet,
-    out_dir,
-    positive_float,
-    positive_int,
-)
+from .common import SCENE_HELP, add_command, add_quiet, out_dir, positive_float, positive_int
 
 
 def _cmd_accuracy(args: argparse.Namespace) -> int:
-    from ..errors import SceneError
-    from ..model.scene import check_horizon, load_scene
-    from ..studies.accuracy.report import write_report
-    from ..studies.accuracy.study import DEFAULT_SETTINGS, QUICK_SETTINGS, run_study
+    from ..model.scene import load_scene
+    from ..studies.accuracy.run import run_accuracy
 
     scene = load_scene(args.scene)
-    if args.stop_time is not None:
-        try:
-            check_horizon(args.stop_time, scene.integrator.output_interval, stop_key="--stop-time")
-        except SceneError as exc:
-            raise SceneError(f"{scene.source}: {exc}") from None
-    out = out_dir(args, scene.name, "accuracy")
-    settings = QUICK_SETTINGS if args.quick else DEFAULT_SETTINGS
-    study = run_study(
+    path = run_accuracy(
         scene,
+        out_dir(args, scene.name, "accuracy"),
         stop_time=args.stop_time,
-        settings=settings,
+        quick=args.quick,
         repeats=args.repeats,
         quiet=args.quiet,
     )
-    write_report(study, out)
-    print(f"wrote {out / 'report.md'}")
+    print(f"wrote {path}")
     return 0
 
 
@@ -72,34 +55,32 @@ def register(sub: Any) -> None:
     register_stress(sub)
 
 
+def _list_cases(cases: list[Any]) -> None:
+    width = max(len(c.group) for c in cases)
+    for c in cases:
+        by_model: dict[str, list[str]] = {}
+        for model, integ in c.runs:
+            by_model.setdefault(model, []).append(integ)
+        which = ", ".join(
+            m if integs == [m] else f"{m} {'/'.join(integs)}" for m, integs in by_model.items()
+        )
+        quick = "quick" if c.quick else "     "
+        print(f"{c.group:<{width}}  {quick}  {c.name}: {which}")
+
+
 def _cmd_stress(args: argparse.Namespace) -> int:
-    from ..studies.stress.cases import select_cases
+    from ..studies.stress.run import cases_of, run_stress
 
-    cases = select_cases(quick=args.quick, only=args.only)
-    if not cases:
-        raise CliError(f"--only = {args.only!r} matches no case (csfh stress --list)")
     if args.list:
-        width = max(len(c.group) for c in cases)
-        for c in cases:
-            by_model: dict[str, list[str]] = {}
-            for model, integ in c.runs:
-                by_model.setdefault(model, []).append(integ)
-            which = ", ".join(
-                m if integs == [m] else f"{m} {'/'.join(integs)}" for m, integs in by_model.items()
-            )
-            quick = "quick" if c.quick else "     "
-            print(f"{c.group:<{width}}  {quick}  {c.name}: {which}")
+        _list_cases(cases_of(quick=args.quick, only=args.only))
         return 0
-    from ..studies.stress.report import write_report
-    from ..studies.stress.suite import run_suite
-
-    out = out_dir(args, "stress")
-    runs = run_suite(cases, quiet=args.quiet)
-    write_report(cases, runs, out)
-    counts = {v: sum(r.verdict == v for r in runs) for v in ("pass", "limit", "fail")}
+    outcome = run_stress(
+        out_dir(args, "stress"), quick=args.quick, only=args.only, quiet=args.quiet
+    )
+    counts = outcome.counts()
     print(
-        f"{len(runs)} runs: {counts['pass']} pass, {counts['limit']} documented limits, "
-        f"{counts['fail']} fail -> {out / 'stress.md'}"
+        f"{len(outcome.runs)} runs: {counts['pass']} pass, {counts['limit']} documented limits, "
+        f"{counts['fail']} fail -> {outcome.path}"
     )
     return 1 if counts["fail"] else 0
 

@@ -59,7 +59,9 @@ def add_quiet(p: argparse.ArgumentParser) -> None:
 
 def out_dir(args: argparse.Namespace, *default: str) -> Path:
     """--out, else results/<default...>."""
-    return Path(args.out) if args.out else Path("results", *default)
+    from ..output import results_dir
+
+    return results_dir(args.out, *default)
 
 
 def positive_int(text: str) -> int:

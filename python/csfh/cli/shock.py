@@ -7,15 +7,11 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
-import time
 from pathlib import Path
 from typing import Any
 
+from ..studies.shock import DEFAULT_DIRECTIONS
 from .common import SCENE_HELP, CliError, add_command, add_quiet
-
-DEFAULT_DIRECTIONS = 24
-STEP_FACTOR = 10  # the default communication step, in output intervals
 
 
 def register(sub: Any) -> None:
@@ -34,6 +30,14 @@ def register(sub: Any) -> None:
         "interrupted command resumes).",
     )
     p.add_argument("scene", nargs="?", help=SCENE_HELP)
+    _pulse_options(p)
+    _study_options(p)
+    add_quiet(p)
+    p.set_defaults(func=cmd_shock)
+
+
+def _pulse_options(p: argparse.ArgumentParser) -> None:
+    """The pulse, its start and directions."""
     p.add_argument(
         "--condition",
         metavar="NAME",
@@ -63,6 +67,10 @@ def register(sub: Any) -> None:
         help="number of directions evenly over 360 degrees, from 0 (default: "
         f"{DEFAULT_DIRECTIONS})",
     )
+
+
+def _study_options(p: argparse.ArgumentParser) -> None:
+    """The models, the runs, the Monte Carlo, where and how the runs are computed."""
     p.add_argument(
         "--models",
         nargs="+",
@@ -109,8 +117,6 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--list-conditions", action="store_true", help="print the standard conditions and exit"
     )
-    add_quiet(p)
-    p.set_defaults(func=cmd_shock)
 
 
 def _number(option: str, text: str | None, *, positive: bool = False) -> float | None:
@@ -139,16 +145,23 @@ def _count(option: str, text: str | None, minimum: int) -> int | None:
     return value
 
 
-def cmd_shock(args: argparse.Namespace) -> int:
+def _pulse(args: argparse.Namespace, peak: float | None, duration: float | None) -> Any:
     from ..studies.shock import conditions
 
-    if args.list_conditions:
-        for c in conditions.CONDITIONS.values():
-            print(f"{c.name:<20} {c.peak_g:>7g} g {c.duration * 1e3:>5g} ms   {c.source}")
-        return 0
-    if args.scene is None:
-        raise CliError("shock needs a SCENE (a built-in scene or a .toml file)")
-    # every number first, so that a typo costs no run
+    if args.condition is not None and (peak is not None or duration is not None):
+        raise CliError("give either --condition or --peak and --duration, not both")
+    if (peak is None) != (duration is None):
+        raise CliError("--peak and --duration go together")
+    if peak is not None and duration is not None:
+        return conditions.pulse(peak, duration)
+    return conditions.condition(args.condition or conditions.DEFAULT_CONDITION)
+
+
+def _request(args: argparse.Namespace) -> Any:
+    """The study's request from the options, every number checked first (a typo costs no
+    run)."""
+    from ..studies.shock.run import ShockRequest
+
     peak = _number("--peak", args.peak, positive=True)
     duration = _number("--duration", args.duration)
     if duration is not None and not duration > 0:
@@ -159,174 +172,65 @@ def cmd_shock(args: argparse.Namespace) -> int:
         raise CliError(f"--start = {args.start!r} s must be >= 0")
     direction = _number("--direction", args.direction)
     n_dirs = _count("--directions", args.directions, 1)
+    if direction is not None and n_dirs is not None:
+        raise CliError("give either --direction or --directions, not both")
     stop = _number("--stop-time", args.stop_time, positive=True)
     step = _number("--step", args.step, positive=True)
     runs = _count("--runs", args.runs, 1)
     seed = _count("--seed", args.seed, 0)
-    workers = _count("--workers", args.workers, 1)
-    if args.condition is not None and (peak is not None or duration is not None):
-        raise CliError("give either --condition or --peak and --duration, not both")
-    if (peak is None) != (duration is None):
-        raise CliError("--peak and --duration go together")
-    if direction is not None and n_dirs is not None:
-        raise CliError("give either --direction or --directions, not both")
     if args.tolerance is None and (runs is not None or seed is not None):
         raise CliError("--runs and --seed need --tolerance FILE")
-    try:
-        if peak is not None and duration is not None:
-            pulse = conditions.pulse(peak, duration)
-        else:
-            pulse = conditions.condition(args.condition or conditions.DEFAULT_CONDITION)
-    except ValueError as exc:
-        raise CliError(str(exc)) from None
-    return _run(args, pulse, start, direction, n_dirs, stop, step, runs, seed, workers)
-
-
-def _run(
-    args: argparse.Namespace,
-    pulse: Any,
-    start: float,
-    direction: float | None,
-    n_dirs: int | None,
-    stop: float | None,
-    step: float | None,
-    runs: int | None,
-    seed: int | None,
-    workers: int | None,
-) -> int:
-    from dataclasses import replace
-
-    from ..batch.executors import run_tasks
-    from ..batch.store import ResultStore
-    from ..model import model_info
-    from ..model._csfh_variables import MAX_COMMUNICATION_POINTS
-    from ..model.scene import load_scene
-    from ..output import output_set
-    from ..studies.shock import report, study
-    from ..studies.tolerance import study as tolerance
-
-    scene = study.at_rest(load_scene(args.scene))
-    try:
-        models = study.check_models(args.models or model_info.LAWS)
-    except ValueError as exc:
-        raise CliError(str(exc)) from None
-    stop_time = stop or scene.stop_time
-    if not start < stop_time:
-        raise CliError(f"--start = {start:g} s is not before the horizon {stop_time:g} s")
-    spec = study.ShockSpec(
-        scene=scene,
-        pulse=pulse,
-        directions=(direction % 360.0,)
-        if direction is not None
-        else study.directions(n_dirs or DEFAULT_DIRECTIONS),
-        models=models,
+    return ShockRequest(
+        scene=args.scene,
+        pulse=_pulse(args, peak, duration),
         start=start,
-        stop_time=stop_time,
-        step=step or STEP_FACTOR * scene.integrator.output_interval,
+        direction=direction,
+        directions=n_dirs,
+        models=tuple(args.models) if args.models else None,
+        stop_time=stop,
+        step=step,
+        tolerance=args.tolerance,
+        runs=runs,
+        seed=seed,
     )
-    if spec.stop_time / spec.step > MAX_COMMUNICATION_POINTS:
-        raise CliError(
-            f"{spec.stop_time:g} s in steps of {spec.step:g} s are more than "
-            f"{MAX_COMMUNICATION_POINTS:g} communication points: give a larger --step"
-        )
-    tol = None
-    if args.tolerance is not None:
-        tol = tolerance.study_for_scene(scene, args.tolerance)
-        tol = replace(tol, runs=runs or tol.runs, seed=tol.seed if seed is None else seed)
-    out = Path(args.out) if args.out else Path("results") / "shock" / spec.scene.name
-    store = ResultStore(out)
-    wall = time.perf_counter()
 
-    def execute(tasks: list[Any], label: str) -> Any:
-        try:
-            return run_tasks(
-                tasks,
-                store,
-                workers=workers,
-                dask_address=args.dask,
-                label=label,
-                quiet=args.quiet,
-            )
-        except KeyboardInterrupt:
-            print(
-                f"csfh: {len(store)} finished runs are kept in {out}; run the same command "
-                "again to resume",
-                file=sys.stderr,
-            )
-            raise
-        except RuntimeError as exc:
-            raise CliError(str(exc)) from None
 
-    tasks = study.direction_tasks(spec)
-    rep = execute(tasks, f"shock {spec.scene.name}")
-    result = study.analyse_directions(spec, tasks, store)
-    counts = {"tasks": rep.total, "computed": rep.computed, "reused": rep.reused}
-    executor = rep.executor
-    mc = None
-    run_info: dict[str, Any] = {}
-    if tol is not None:
-        samples = [tolerance.sample(tol, k) for k in range(tol.runs)]
-        tolerance.check_samples(tol, samples)
-        worst = {m: result["models"][m]["worst_direction"] for m in spec.models}
-        mc_tasks = study.montecarlo_tasks(spec, samples, tol.nominal, worst)
-        mc_rep = execute(mc_tasks, f"shock Monte Carlo {spec.scene.name}")
-        mc = study.analyse_montecarlo(spec, samples, mc_tasks, store)
-        variables = model_info.variables()
-        units = {k: variables[k].unit or "" for k in tol.tolerances}
-        for key in counts:
-            counts[key] += getattr(mc_rep, key if key != "tasks" else "total")
-        executor = mc_rep.executor
-        run_info["tolerance"] = {
-            "source": tol.source,
-            "runs": tol.runs,
-            "seed": tol.seed,
-            "distributions": {k: d.describe(units.get(k, "")) for k, d in tol.tolerances.items()},
-            "nominal": tol.nominal,
-            "units": units,
-        }
-    series = {
-        (m, key): study.time_series(
-            spec, m, result["models"][m][which], min(spec.step, scene.integrator.output_interval)
-        )
-        for m in spec.models
-        for key, which in (
-            ("stress", "worst_flexure_stress_direction"),
-            ("pressure", "worst_contact_pressure_direction"),
-        )
-    }
-    run_info.update(counts)
-    run_info["executor"] = executor
-    run_info["wall_time"] = time.perf_counter() - wall
-    # the report replaces the previous one as a whole (a run without --tolerance leaves no stale
-    # Monte Carlo figure); the result store is not part of it
-    with output_set(out, "shock"):
-        figures = [
-            report.plot_time(out / "shock_time.png", spec, series, result),
-            report.plot_polar(out / "shock_polar.png", spec, result),
-        ]
-        if mc is not None:
-            figures.append(
-                report.plot_montecarlo(out / "shock_montecarlo.png", spec, mc, result["allowables"])
-            )
-        report.write_json_report(out / "shock.json", spec, result, run_info, mc)
-        report.write_markdown(out / "shock.md", spec, result, run_info, figures, mc)
-    if not args.quiet:
+def _print(outcome: Any, quiet: bool) -> None:
+    result, mc, info = outcome.result, outcome.montecarlo, outcome.run_info
+    if not quiet:
         for m, r in result["models"].items():
             print(
                 f"  {m:<13} worst {r['worst_direction']:g}°: flexure margin "
                 f"{r['min_flexure_margin']:+.3f}, contact margin {r['min_contact_margin']:+.3f}"
                 f" -> {'pass' if r['passed'] else 'FAIL'}"
             )
-        if mc is not None:
-            for m, r in mc["models"].items():
-                p = r["probability"]["either"]
-                print(
-                    f"  {m:<13} P(exceeding an allowable) = {p['p']:.3g} "
-                    f"[{p['low']:.3g}, {p['high']:.3g}] ({p['runs']} samples)"
-                )
+        for m, r in (mc["models"] if mc is not None else {}).items():
+            p = r["probability"]["either"]
+            print(
+                f"  {m:<13} P(exceeding an allowable) = {p['p']:.3g} "
+                f"[{p['low']:.3g}, {p['high']:.3g}] ({p['runs']} samples)"
+            )
     print(
-        f"shock: {'PASS' if result['passed'] else 'FAIL'}, {counts['tasks']} runs "
-        f"({counts['computed']} computed, {counts['reused']} reused, {executor}) -> "
-        f"{out / 'shock.md'}"
+        f"shock: {'PASS' if outcome.passed else 'FAIL'}, {info['tasks']} runs "
+        f"({info['computed']} computed, {info['reused']} reused, {info['executor']}) -> "
+        f"{outcome.path}"
     )
-    return 0 if result["passed"] else 1
+
+
+def cmd_shock(args: argparse.Namespace) -> int:
+    from ..studies.execution import Execution
+    from ..studies.shock import conditions
+    from ..studies.shock.run import run_shock
+
+    if args.list_conditions:
+        for c in conditions.CONDITIONS.values():
+            print(f"{c.name:<20} {c.peak_g:>7g} g {c.duration * 1e3:>5g} ms   {c.source}")
+        return 0
+    if args.scene is None:
+        raise CliError("shock needs a SCENE (a built-in scene or a .toml file)")
+    request = _request(args)
+    workers = _count("--workers", args.workers, 1)
+    how = Execution(Path(args.out) if args.out else None, workers, args.dask, args.quiet)
+    outcome = run_shock(request, how)
+    _print(outcome, args.quiet)
+    return 0 if outcome.passed else 1

@@ -9,7 +9,8 @@ from typing import Any
 
 from ..errors import SceneError
 from ..model.cosim_section import CosimSettings, parse_cosim
-from ..model.scene import Scene, check_horizon, load_scene
+from ..model.limits import check_horizon
+from ..model.scene import Scene, load_scene
 from ..progress import Progress
 from ..runners.simulate import with_source
 from ..trajectory import Trajectory

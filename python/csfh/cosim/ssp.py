@@ -51,7 +51,8 @@ from .._version import __version__
 from ..errors import ResultsError, SceneError
 from ..model.cosim_section import CONNECTIONS, DEFAULT_TOLERANCE, CosimSettings
 from ..model.fmus import description
-from ..model.scene import Scene, check_horizon, load_scene
+from ..model.limits import check_horizon
+from ..model.scene import Scene, load_scene
 from ..output import write_bytes
 from ..paths import combdrive_fmu_path, fmu_path
 from ..runners.fmu import OUTPUT_NAMES, STATE_NAMES

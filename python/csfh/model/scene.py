@@ -3,8 +3,8 @@ the model are on, parameter overrides, constant inputs and integrator settings (
 
 A scene is refused when it is loaded, with one line naming the file, the key and the value, when
 it leaves these limits (so that no scene exhausts the memory or runs for hours by accident; the
-run-length limits and the defaults of the keys are the [harness] and [default_experiment] tables
-of modelDescription/variables.toml, as the constants of this module):
+run-length limits, csfh.model.limits, and the defaults of the keys are the [harness] and
+[default_experiment] tables of modelDescription/variables.toml):
 
 * ``name``: one plain file name (it names the output directory results/NAME): no ``/`` or
   backslash, not starting with ``.``, no control characters, at most 100 characters;
@@ -73,22 +73,19 @@ from . import model_info
 from ._csfh_variables import (
     DEFAULT_STOP_TIME,
     DEFAULT_TOLERANCE,
-    MAX_MOREAU_STEPS,
-    MAX_OUTPUT_SAMPLES,
-    MAX_STOP_TIME,
     MOREAU_G_TOL,
     MOREAU_STEP,
     MOREAU_V_EPS,
     OUTPUT_INTERVAL,
 )
 from .cosim_section import parse_cosim
+from .limits import check_horizon
 from .presets import PRESETS
 
 STICK_RULES = ("paper", "memory")
 
-# the limits of a scene (module docstring); MAX_STOP_TIME (s, the longest run),
-# MAX_OUTPUT_SAMPLES (the most output rows of a run: stop_time / output_interval, or / the
-# communication step) and MAX_MOREAU_STEPS (stop_time / moreau_h) are [harness] values
+# the limits of a scene besides its length (module docstring; the run-length limits and their
+# checks are csfh.model.limits)
 MAX_NAME_LENGTH = 100
 MIN_RTOL = 1e-14
 """The tightest relative tolerance of CVODE."""
@@ -355,43 +352,18 @@ def check_name(name: Any) -> str:
     return name
 
 
-def check_horizon(
-    stop_time: float,
-    output_interval: float,
-    moreau_h: float | None = None,
-    *,
-    stop_key: str = "stop_time",
-    interval_key: str = "integrator.output_interval",
-) -> None:
-    """The limits of a run's length (module docstring): SceneError naming the key and value.
-    `stop_key` and `interval_key` name where the stop time and the output interval come from
-    (keys of the scene, or command-line options)."""
-    T, dt = stop_time, output_interval
-    if not T <= MAX_STOP_TIME:
-        raise SceneError(
-            f"{stop_key} = {T:g} s is longer than {MAX_STOP_TIME:g} s, the longest run (every "
-            "transient of the hinge decays within seconds)"
+def check_run_horizon(scene: Scene, stop_time: float, stop_key: str = "--stop-time") -> None:
+    """The scene's limits on a horizon that an option (`stop_key`) changed: SceneError naming
+    the scene's file, the option and the value."""
+    try:
+        check_horizon(
+            stop_time,
+            scene.integrator.output_interval,
+            scene.integrator.moreau_h,
+            stop_key=stop_key,
         )
-    if dt > T:
-        raise SceneError(f"{interval_key} = {dt:g} s is longer than {stop_key} = {T:g} s")
-    if T / dt > MAX_OUTPUT_SAMPLES:
-        raise SceneError(
-            f"{interval_key} = {dt:g} s gives {T / dt:.3g} output samples over {stop_key} = "
-            f"{T:g} s; at most {MAX_OUTPUT_SAMPLES:g} (a larger {interval_key.split('.')[-1]} or "
-            "a shorter stop time)"
-        )
-    if moreau_h is None:
-        return
-    h = moreau_h
-    if h > T:
-        raise SceneError(
-            f"integrator.moreau_h = {h:g} s is longer than {stop_key} = {T:g} s (not one step)"
-        )
-    if T / h > MAX_MOREAU_STEPS:
-        raise SceneError(
-            f"integrator.moreau_h = {h:g} s gives {T / h:.3g} Moreau steps over {stop_key} = "
-            f"{T:g} s; at most {MAX_MOREAU_STEPS:g} (a larger moreau_h or a shorter stop time)"
-        )
+    except SceneError as exc:
+        raise SceneError(f"{scene.source or scene.name}: {exc}") from None
 
 
 def _check_initial(scene: Scene) -> None:

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..model import model_info
+from ..model.limits import check_rows
 from ..model.scene import Scene
 from ..progress import Progress
 from ..trajectory import Trajectory
@@ -33,7 +34,6 @@ from .fmu import (
     TABLE_COLUMNS,
     Table,
     check_law,
-    check_rows,
     contact_bookkeeping,
     cs_method_name,
     cs_trajectory,

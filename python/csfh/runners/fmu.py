@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import ParameterError, SimulationError
 from ..model import model_info
-from ..model.scene import MAX_OUTPUT_SAMPLES, Scene
+from ..model.scene import Scene
 from ..paths import fmu_path
 from ..trajectory import CONTACT_FIELDS, Trajectory
 
@@ -128,20 +128,6 @@ def check_law(law: str) -> None:
         raise ParameterError(
             f"law {law!r} is not an event-driven law ({', '.join(model_info.LAWS)})"
         )
-
-
-def check_rows(t_end: float, step: float, what: str) -> int:
-    """The number of output rows of a run on a grid of `step` up to `t_end`, within the limit of
-    a scene (csfh.model.scene.MAX_OUTPUT_SAMPLES); ParameterError naming the values otherwise."""
-    for name, value in (("stop_time", t_end), (what, step)):
-        if not (value > 0 and math.isfinite(value)):
-            raise ParameterError(f"{name} = {value!r} must be a finite number > 0")
-    if not t_end / step <= MAX_OUTPUT_SAMPLES:
-        raise ParameterError(
-            f"{what} = {step:g} s gives {t_end / step:.3g} output rows over {t_end:g} s; at most "
-            f"{MAX_OUTPUT_SAMPLES:g}"
-        )
-    return math.ceil(t_end / step - 1e-9)
 
 
 def fmu_error(law: str, t: float, call: str, reason: str) -> SimulationError:

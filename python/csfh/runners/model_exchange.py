@@ -26,6 +26,7 @@ from ..errors import SimulationError
 from ..model import model_info
 from ..model._csfh_variables import MAX_ME_STEPS
 from ..model.fmus import FmuLog
+from ..model.limits import check_rows
 from ..model.scene import Scene
 from ..progress import Progress
 from ..trajectory import Trajectory
@@ -36,7 +37,6 @@ from .fmu import (
     TABLE_COLUMNS,
     Table,
     check_law,
-    check_rows,
     contact_arrays,
     fmu_error,
     resident_binary,

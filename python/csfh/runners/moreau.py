@@ -19,7 +19,8 @@ from ..errors import ParameterError, SimulationError
 from ..model._csfh_variables import MOREAU_V_STICK
 from ..model.core import N_STATES, library
 from ..model.instance import core_model
-from ..model.scene import MAX_MOREAU_STEPS, MAX_OUTPUT_SAMPLES, Scene, load_scene
+from ..model.limits import moreau_step_counts
+from ..model.scene import Scene, load_scene
 from ..trajectory import Trajectory
 
 STICK_RULES = {"paper": 1, "memory": 2}
@@ -67,31 +68,6 @@ _STATS = (
 )
 
 
-def step_counts(t_end: float, h: float, dt_out: float) -> tuple[int, int, int]:
-    """(steps, steps per output row, rows to allocate) of a Moreau run, within the limits of a
-    scene (csfh.model.scene: at least one step, at most MAX_MOREAU_STEPS steps and
-    MAX_OUTPUT_SAMPLES rows); ParameterError naming the values otherwise."""
-    for name, value in (("stop_time", t_end), ("h", h), ("output_interval", dt_out)):
-        if not (value > 0 and math.isfinite(value)):
-            raise ParameterError(f"Moreau: {name} = {value!r} must be a finite number > 0")
-    if not t_end / h <= MAX_MOREAU_STEPS:
-        raise ParameterError(
-            f"Moreau: h = {h:g} s gives {t_end / h:.3g} steps over {t_end:g} s; at most "
-            f"{MAX_MOREAU_STEPS:g}"
-        )
-    n_steps = round(t_end / h)
-    if n_steps < 1:
-        raise ParameterError(f"Moreau: h = {h:g} s is longer than the run ({t_end:g} s)")
-    record_every = max(1, round(dt_out / h))
-    max_records = n_steps // record_every + 2
-    if max_records > MAX_OUTPUT_SAMPLES + 2:
-        raise ParameterError(
-            f"Moreau: output_interval = {dt_out:g} s gives {max_records - 2} rows; at most "
-            f"{MAX_OUTPUT_SAMPLES:g}"
-        )
-    return n_steps, record_every, max_records
-
-
 def moreau(
     scene: Scene | str | Path,
     *,
@@ -119,7 +95,7 @@ def moreau(
         raise ParameterError(f"h = {h!r} must be a positive step")
     t_end = scene.stop_time if stop_time is None else stop_time
     dt_out = scene.integrator.output_interval if output_interval is None else output_interval
-    n_steps, record_every, max_records = step_counts(t_end, h, dt_out)
+    n_steps, record_every, max_records = moreau_step_counts(t_end, h, dt_out)
     lib = library()
     ncols, icols = lib.csfh_api_moreau_record_columns(), lib.csfh_api_moreau_impact_columns()
     assert ncols == len(_RECORD) and icols == len(_IMPACT), "core library and harness disagree"

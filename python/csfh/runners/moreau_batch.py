@@ -22,9 +22,10 @@ from ..errors import ParameterError, SimulationError
 from ..model._csfh_variables import MOREAU_V_STICK
 from ..model.core import N_STATES, CoreModel, library
 from ..model.instance import core_model
+from ..model.limits import moreau_step_counts
 from ..model.scene import Scene
 from ..trajectory import SIGNALS, Trajectory
-from .moreau import _IMPACT, _RECORD, _STATS, STICK_RULES, step_counts, trajectory_from_buffers
+from .moreau import _IMPACT, _RECORD, _STATS, STICK_RULES, trajectory_from_buffers
 
 _dp = POINTER(c_double)
 
@@ -156,7 +157,7 @@ def moreau_batch(
         raise ParameterError(f"h = {h!r} must be a positive step")
     t_end = scene.stop_time if stop_time is None else stop_time
     dt_out = scene.integrator.output_interval if output_interval is None else output_interval
-    n_steps, record_every, max_records = step_counts(t_end, h, dt_out)
+    n_steps, record_every, max_records = moreau_step_counts(t_end, h, dt_out)
     n = len(parameter_sets)
     models: list[CoreModel] = [core_model(scene, p) for p in parameter_sets]
     handles = (c_void_p * max(n, 1))(*[m.handle for m in models])
