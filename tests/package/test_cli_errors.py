@@ -316,3 +316,94 @@ def test_cli_unknown_scene_and_law(tmp_path: Path) -> None:
     assert proc.returncode == 2 and "unknown scene 'nowhere'" in proc.stderr
     proc = run_csfh("run", "central", "--law", "Bogus", cwd=tmp_path)
     assert proc.returncode == 2 and "Bogus" in proc.stderr
+
+
+# ------------------------------------------------------------------------------------------
+# csfh's own errors (csfh.errors) are one line and exit status 2; anything else is a bug and
+# shows its traceback
+
+
+class RaisingRunner:
+    """The Moreau runner's place in the registry, raising `error` when it runs."""
+
+    interface, models = "core", ("Moreau",)
+    batches = same_parameters = exclusive = False
+
+    def __init__(self, error: BaseException) -> None:
+        self.error = error
+
+    def run(self, *args: object, **kwargs: object) -> object:
+        raise self.error
+
+    run_many = run
+
+
+USER_ERRORS = [
+    "SceneError",
+    "ParameterError",
+    "SimulationError",
+    "ResultsError",
+    "InstallError",
+    "CliError",
+]
+
+
+@pytest.mark.parametrize("name", USER_ERRORS)
+def test_each_user_error_is_one_line_with_status_2(
+    name: str, monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from csfh import errors
+    from csfh.cli.main import main
+    from csfh.runners import registry
+
+    error = getattr(errors, name)(f"the {name}\nover two lines")
+    monkeypatch.setitem(registry.RUNNERS, "core", RaisingRunner(error))
+    status = main(["run", "central", "--law", "Moreau", "--out", str(tmp_path), "--quiet"])
+    assert status == 2
+    where = "central (built-in): " if name == "SimulationError" else ""  # a run names its scene
+    assert capsys.readouterr().err.splitlines() == [
+        f"csfh: error: {where}the {name} over two lines"
+    ]
+
+
+BUG = """
+import sys
+from csfh.runners import registry
+
+class Broken:
+    interface, models = "core", ("Moreau",)
+    batches = same_parameters = exclusive = False
+
+    def run(self, *args, **kwargs):
+        raise ValueError("a programming bug")
+
+registry.RUNNERS["core"] = Broken()
+from csfh.cli.main import main
+sys.exit(main(["run", "central", "--law", "Moreau", "--out", sys.argv[1], "--quiet"]))
+"""
+
+
+def test_a_bug_shows_its_traceback(tmp_path: Path) -> None:
+    """A ValueError from inside a run is not the user's: the command line does not turn it into
+    one line, it ends with the traceback (exit status 1)."""
+    proc = subprocess.run(
+        [sys.executable, "-c", BUG, str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+        env=csfh_env(),
+        timeout=120,
+    )
+    assert proc.returncode == 1
+    assert "Traceback (most recent call last)" in proc.stderr
+    assert proc.stderr.strip().splitlines()[-1] == "ValueError: a programming bug"
+    assert "csfh: error" not in proc.stderr
+
+
+def test_an_output_directory_that_is_a_file_is_one_line(tmp_path: Path) -> None:
+    target = tmp_path / "a file"
+    target.write_text("not a directory\n")
+    proc, _ = run_cli(["run", "central", "--law", "Moreau", "--out", str(target)], tmp_path)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"csfh: error: {target}: "), proc.stderr
+    assert "Traceback" not in proc.stderr and target.read_text() == "not a directory\n"

@@ -191,8 +191,8 @@ def _run_group(runner: Runner, tasks: Sequence[Task]) -> list[Result]:
 
 
 def run_alone(task: Task) -> Result:
-    """A task as one run of its runner (`Runner.run`) rather than in a batch: the result a batch
-    gives it (tested), at the cost of one run per call."""
+    """A task as one run of its runner (`Runner.run`) rather than in a batch, at the cost of one
+    run per call: for co-simulation the result the batch master gives it (tested)."""
     runner = runner_for(task.model, task.interface)
     with _FMU_LOCK if runner.exclusive else nullcontext():
         tr = runner.run(

@@ -10,22 +10,20 @@ from .common import SCENE_HELP, add_command, add_quiet, out_dir
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from .._version import __version__
-    from ..model import model_info
-    from ..paths import batch_library_path, core_library_path, fmu_path
+    from ..model.installation import summary
 
-    md = model_info.model_description()
-    print(f"csfh         {__version__}")
-    print(f"FMU          {fmu_path()}")
-    print(f"core library {core_library_path()}")
-    try:
-        print(f"batch master {batch_library_path()}")
-    except FileNotFoundError:
-        print("batch master not built (co-simulation tasks run one by one through fmpy)")
-    print(f"model        {md.modelName} {md.version} (FMI {md.fmiVersion}, GUID {md.guid})")
-    print(f"interfaces   {'ME ' if md.modelExchange else ''}{'CS' if md.coSimulation else ''}")
-    print(f"variables    {len(md.modelVariables)}")
-    print(f"models       {', '.join(model_info.MODELS)}")
+    info = summary()
+    print(f"csfh {info.version}")
+    for found in info.artefacts:
+        if found.path is None:
+            print(f"{found.label + ':':<26} {found.origin}")
+            continue
+        print(f"{found.label + ':':<26} {found.path} ({found.origin})")
+        print(f"{'':<26} {found.details}")
+    build = info.source_build or "none (an installed package uses its own files)"
+    print(f"{'source build:':<26} {build}")
+    print(f"{'models:':<26} {', '.join(info.models)}")
+    print(f"{'built-in scenes:':<26} {', '.join(info.scenes)}")
     return 0
 
 
@@ -97,10 +95,12 @@ def register(sub: Any) -> None:
     p = add_command(
         sub,
         "info",
-        help="show the version, the FMU and the core library the package uses",
-        description="Show the csfh version, which FMU and core library are in use (the "
-        "package's, $CSFH_FMU / $CSFH_CORE, or a build tree), what the FMU declares, and the "
-        "models.",
+        help="show the version, the FMUs, libraries and scenes the package uses",
+        description="Show the csfh version; the FMUs (FMI 2.0 and 3.0, the hinge and the "
+        "comb-drive actuator) and the ctypes libraries in use, each with where it comes from "
+        "(an environment variable, the package, a source build), an FMU's FMI version and the "
+        "platforms it has binaries for, a library's ABI version; the models and the built-in "
+        "scenes.",
     )
     p.set_defaults(func=_cmd_info)
 
