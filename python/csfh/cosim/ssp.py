@@ -158,6 +158,75 @@ def _component(
         _typed(p, "ssv", var, value)
 
 
+def _hinge(
+    scene: Scene, csfh_md: Any, where: str
+) -> tuple[dict[str, Any], dict[str, Any], set[str]]:
+    """The hinge's start values (its parameters and constant inputs, the start state as the
+    initial.* parameters), those SSP binds as parameters, and the constant inputs among them."""
+    start = csfh_start_values(scene)
+    hinge = {k: v for k, v in start.items() if k not in STATE_NAMES}
+    hinge["initial.from_parameters"] = True
+    hinge.update({f"initial.{n}": float(start[n]) for n in STATE_NAMES})
+    params = _bindable(csfh_md, hinge, where)
+    bound_inputs = {n for n, (var, _) in params.items() if var.causality == "input"}
+    return hinge, {n: pv for n, pv in params.items() if n not in bound_inputs}, bound_inputs
+
+
+def _bind_inputs(component: Any, names: set[str], csfh_md: Any, hinge: dict[str, Any]) -> None:
+    """Constant inputs of the scene (not connected): bound like parameters, as SSP allows."""
+    if not names:
+        return
+    variables = {v.name: v for v in csfh_md.modelVariables}
+    plist = component.find(
+        "ssd:ParameterBindings/ssd:ParameterBinding/ssd:ParameterValues/"
+        "ssv:ParameterSet/ssv:Parameters",
+        NS,
+    )
+    assert plist is not None
+    for n in sorted(names):
+        p = ET.SubElement(plist, _q("ssv:Parameter"), {"name": n})
+        _typed(p, "ssv", variables[n], hinge[n])
+
+
+def _connections(system: Any, links: list[tuple[str, str]], moment: bool) -> None:
+    """The actuator's outputs to the hinge's inputs, and theta back with the moment."""
+    wires = [("combdrive", out, "csfh", inp) for out, inp in links]
+    if moment:
+        wires.append(("csfh", "body1.theta", "combdrive", "theta"))
+    connections = ET.SubElement(system, _q("ssd:Connections"))
+    for start_element, start_connector, end_element, end_connector in wires:
+        ET.SubElement(
+            connections,
+            _q("ssd:Connection"),
+            {
+                "startElement": start_element,
+                "startConnector": start_connector,
+                "endElement": end_element,
+                "endConnector": end_connector,
+            },
+        )
+
+
+def _experiment(root: Any, stop_time: float, step: float) -> None:
+    """The default experiment, with OSP's fixed-step algorithm annotation."""
+    experiment = ET.SubElement(
+        root, _q("ssd:DefaultExperiment"), {"startTime": "0.0", "stopTime": repr(stop_time)}
+    )
+    annotations = ET.SubElement(experiment, _q("ssd:Annotations"))
+    annotation = ET.SubElement(annotations, _q("ssc:Annotation"), {"type": OSP_ANNOTATION})
+    algorithm = ET.SubElement(annotation, _q("osp:Algorithm"))
+    ET.SubElement(algorithm, _q("osp:FixedStepAlgorithm"), {"baseStepSize": repr(step)})
+
+
+def _check_tolerance(s: CosimSettings, where: str) -> None:
+    if s.tolerance is not None and s.tolerance != DEFAULT_TOLERANCE:
+        raise SceneError(
+            f"{where}: cosim.tolerance = {s.tolerance!r} cannot be carried by SSP 1.0 (it is "
+            f"fmi2SetupExperiment's, not a variable; importers use the FMU's default "
+            f"{DEFAULT_TOLERANCE:g}): remove the key to export"
+        )
+
+
 def ssd_text(
     scene: Scene,
     settings: CosimSettings,
@@ -168,29 +237,15 @@ def ssd_text(
     """SystemStructure.ssd of the scene's coupled system (see the module's docstring)."""
     s = settings
     where = scene.source or scene.name
-    if s.tolerance is not None and s.tolerance != DEFAULT_TOLERANCE:
-        raise SceneError(
-            f"{where}: cosim.tolerance = {s.tolerance!r} cannot be carried by SSP 1.0 (it is "
-            f"fmi2SetupExperiment's, not a variable; importers use the FMU's default "
-            f"{DEFAULT_TOLERANCE:g}): remove the key to export"
-        )
+    _check_tolerance(s, where)
     links = [(o, i) for o, i in CONNECTIONS if s.moment or o != "M"]
-    # the hinge: its parameters and constant inputs, the start state as parameters
-    start = csfh_start_values(scene)
-    hinge = {k: v for k, v in start.items() if k not in STATE_NAMES}
-    hinge["initial.from_parameters"] = True
-    hinge.update({f"initial.{n}": float(start[n]) for n in STATE_NAMES})
-    csfh_params = _bindable(csfh_md, hinge, where)
-    csfh_variables = {v.name: v for v in csfh_md.modelVariables}
-    bound_inputs = {n for n, (var, _) in csfh_params.items() if var.causality == "input"}
-    csfh_params = {n: pv for n, pv in csfh_params.items() if n not in bound_inputs}
+    hinge, csfh_params, bound_inputs = _hinge(scene, csfh_md, where)
     csfh_connectors = [(i, "input") for _, i in links]
     csfh_connectors += [(n, "output") for n in OUTPUT_NAMES.values()]
     csfh_connectors.append(("contact.count", "output"))
     act_params = _bindable(actuator_md, actuator_start_values(s, voltage_in_fmu=True), where)
     act_connectors = [("theta", "input")] if s.moment else []
     act_connectors += [(n, "output") for n in ACTUATOR_COLUMNS]
-
     root = ET.Element(
         _q("ssd:SystemStructureDescription"),
         {
@@ -211,49 +266,10 @@ def ssd_text(
     )
     elements = ET.SubElement(system, _q("ssd:Elements"))
     _component(elements, "csfh", csfh_md, csfh_connectors, csfh_params)
-    # constant inputs of the scene (not connected): bound like parameters, as SSP allows
-    if bound_inputs:
-        comp = elements[0]
-        plist = comp.find(
-            "ssd:ParameterBindings/ssd:ParameterBinding/ssd:ParameterValues/"
-            "ssv:ParameterSet/ssv:Parameters",
-            NS,
-        )
-        assert plist is not None
-        for n in sorted(bound_inputs):
-            p = ET.SubElement(plist, _q("ssv:Parameter"), {"name": n})
-            _typed(p, "ssv", csfh_variables[n], hinge[n])
+    _bind_inputs(elements[0], bound_inputs, csfh_md, hinge)
     _component(elements, "combdrive", actuator_md, act_connectors, act_params)
-    connections = ET.SubElement(system, _q("ssd:Connections"))
-    for out, inp in links:
-        ET.SubElement(
-            connections,
-            _q("ssd:Connection"),
-            {
-                "startElement": "combdrive",
-                "startConnector": out,
-                "endElement": "csfh",
-                "endConnector": inp,
-            },
-        )
-    if s.moment:
-        ET.SubElement(
-            connections,
-            _q("ssd:Connection"),
-            {
-                "startElement": "csfh",
-                "startConnector": "body1.theta",
-                "endElement": "combdrive",
-                "endConnector": "theta",
-            },
-        )
-    experiment = ET.SubElement(
-        root, _q("ssd:DefaultExperiment"), {"startTime": "0.0", "stopTime": repr(stop_time)}
-    )
-    annotations = ET.SubElement(experiment, _q("ssd:Annotations"))
-    annotation = ET.SubElement(annotations, _q("ssc:Annotation"), {"type": OSP_ANNOTATION})
-    algorithm = ET.SubElement(annotation, _q("osp:Algorithm"))
-    ET.SubElement(algorithm, _q("osp:FixedStepAlgorithm"), {"baseStepSize": repr(s.step)})
+    _connections(system, links, s.moment)
+    _experiment(root, stop_time, s.step)
     ET.indent(root)
     return ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n"
 
