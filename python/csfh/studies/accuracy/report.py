@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 from ...output import output_set, write_json, write_text
 from .figures import work_precision
@@ -155,11 +156,8 @@ def _fmt(x: float) -> str:
     return "-" if not math.isfinite(x) else f"{x:.2e}"
 
 
-def _markdown(study: Study) -> str:
-    groups = grouped(study)
-    lines = [f"# Error against run time: scene `{study.scene}`", ""]
-    lines += introduction(study)
-    lines += [
+def _references(study: Study) -> list[str]:
+    lines = [
         "",
         "## References",
         "",
@@ -182,7 +180,11 @@ def _markdown(study: Study) -> str:
                 f"| {model} | {study.references[model]} | {metric} | {_fmt(value)} | "
                 f"{_fmt(smallest)} | {_fmt(ratio)}{verdict} |"
             )
-    lines += ["", "## Figures", ""]
+    return lines
+
+
+def _table(study: Study) -> list[str]:
+    lines = ["", "## Figures", ""]
     for model in dict.fromkeys(p.model for p in study.points):
         lines.append(f"![{model}](wp_{model}.png)")
         lines.append("")
@@ -207,7 +209,11 @@ def _markdown(study: Study) -> str:
             f"| {p.model} | {p.integrator} | {p.label} | {p.vs} | {p.wall_time:.3g} | "
             f"{p.rhs_evaluations} | {p.steps} | " + " | ".join(cells) + " |"
         )
-    lines += [
+    return lines
+
+
+def _orders(groups: dict[Any, list[Point]]) -> list[str]:
+    lines = [
         "",
         "## Observed order of convergence",
         "",
@@ -226,6 +232,13 @@ def _markdown(study: Study) -> str:
             + " | ".join("-" if not math.isfinite(o) else f"{o:.2f}" for o in orders)
             + " |"
         )
-    lines += [""]
+    return lines
+
+
+def _markdown(study: Study) -> str:
+    groups = grouped(study)
+    lines = [f"# Error against run time: scene `{study.scene}`", ""]
+    lines += introduction(study)
+    lines += [*_references(study), *_table(study), *_orders(groups), ""]
     lines += conclusions(study, groups)
     return "\n".join(lines) + "\n"

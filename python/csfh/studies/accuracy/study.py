@@ -39,7 +39,7 @@ import math
 import statistics
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any
 
@@ -104,6 +104,103 @@ def _grid(scene: Scene, stop_time: float) -> np.ndarray:
     return np.arange(1, math.floor(stop_time / dt * (1 + 1e-12)) + 1) * dt
 
 
+def _compliant(
+    study: Study,
+    sc: Scene,
+    model: str,
+    settings: dict[str, list[Any]],
+    ctx: _Context,
+    step: Callable[[], None],
+) -> Trajectory:
+    """A compliant model: its reference (and the check at half the tolerance) and every
+    integrator at every setting; returns the reference."""
+    ref = run(sc, model, "me", rtol=ctx.ref_rtol, output_times=ctx.grid)
+    half = run(sc, model, "me", rtol=ctx.ref_rtol / 2, output_times=ctx.grid)
+    study.references[model] = f"ME CVode rtol {ctx.ref_rtol:g} (check: {ctx.ref_rtol / 2:g})"
+    study.reference_checks[model] = _reference_change(half, ref, ctx.t_end, ctx.radius)
+    for integ in INTEGRATORS:
+        for setting in settings.get(integ, []):
+            study.points.append(
+                _measure(
+                    sc,
+                    model,
+                    integ,
+                    setting,
+                    ref,
+                    ctx.grid,
+                    ctx.t_end,
+                    ctx.radius,
+                    ctx.repeats,
+                    ctx.ref_rtol,
+                )
+            )
+            step()
+    return ref
+
+
+def _moreau(
+    study: Study,
+    sc: Scene,
+    settings: dict[str, list[Any]],
+    ctx: _Context,
+    compliant_ref: Trajectory | None,
+    step: Callable[[], None],
+) -> None:
+    """Moreau against its own h -> 0 reference, and against LN_spheres' where it ran."""
+    h_ref = ctx.ref_moreau_h
+    dt = sc.integrator.output_interval
+    ref = run(sc, "Moreau", "core", h=h_ref, output_interval=dt)
+    half = run(sc, "Moreau", "core", h=h_ref / 2, output_interval=dt)
+    study.references["Moreau"] = f"Moreau h = {h_ref:g} s (check: {h_ref / 2:g})"
+    change = _reference_change(half, ref, ctx.t_end, ctx.radius)
+    study.reference_checks["Moreau"] = {m: change[m] for m in RIGID_METRICS}
+    for h in settings.get("Moreau", []):
+        tr, wall = _median_run(partial(run, sc, "Moreau", "core", h=h), ctx.repeats)
+        for against, vs in ((ref, "self"), (compliant_ref, "LN_spheres")):
+            if against is not None:
+                study.points.append(
+                    _point(
+                        "Moreau",
+                        "Moreau",
+                        h,
+                        f"h = {h:g} s",
+                        tr,
+                        wall,
+                        against,
+                        ctx.t_end,
+                        ctx.radius,
+                        RIGID_METRICS,
+                        vs=vs,
+                    )
+                )
+        step()
+
+
+@dataclass(frozen=True)
+class _Context:
+    """What every measurement of a study shares."""
+
+    t_end: float
+    grid: np.ndarray
+    radius: float
+    repeats: int
+    ref_rtol: float
+    ref_moreau_h: float
+
+
+def _reference_settings(
+    settings: dict[str, list[Any]], ref_rtol: float | None, ref_moreau_h: float | None
+) -> tuple[float, float]:
+    """The references' settings: a thousand times tighter than the tightest setting (rtol at
+    most REF_RTOL, the Moreau step at least REF_MOREAU_H) unless given."""
+    if ref_rtol is None:
+        tightest = [s for i in ("ME", *CS_METHODS) for s in settings.get(i, [])] + [1e-10]
+        ref_rtol = max(REF_RTOL, 1e-3 * min(tightest))
+    if ref_moreau_h is None:
+        ref_moreau_h = max(REF_MOREAU_H, 1e-3 * min(settings.get("Moreau", [1e-6])))
+    return ref_rtol, ref_moreau_h
+
+
 def run_study(
     scene: Scene,
     *,
@@ -119,18 +216,12 @@ def run_study(
     references default to a thousand times tighter than the tightest setting (rtol at most
     1e-13, the Moreau step at least 1e-9 s)."""
     settings = settings or DEFAULT_SETTINGS
-    if ref_rtol is None:
-        ref_rtol = max(
-            REF_RTOL,
-            1e-3 * min([s for i in ("ME", *CS_METHODS) for s in settings.get(i, [])] + [1e-10]),
-        )
-    if ref_moreau_h is None:
-        ref_moreau_h = max(REF_MOREAU_H, 1e-3 * min(settings.get("Moreau", [1e-6])))
+    ref_rtol, ref_moreau_h = _reference_settings(settings, ref_rtol, ref_moreau_h)
     t_end = min(scene.stop_time, stop_time) if stop_time else default_horizon(scene)
     sc = replace(scene, stop_time=t_end)
     models = models or (*COMPLIANT, "Moreau")
     radius = float(sc.parameter_values().get("contact.R1", 0.18))
-    grid = _grid(sc, t_end)
+    ctx = _Context(t_end, _grid(sc, t_end), radius, repeats, ref_rtol, ref_moreau_h)
     study = Study(scene=scene.name, stop_time=t_end)
     total = sum(len(settings.get(i, [])) for i in INTEGRATORS) * sum(
         m in COMPLIANT for m in models
@@ -143,62 +234,9 @@ def run_study(
         done += 1
         progress.update(done)
 
-    refs: dict[str, Trajectory] = {}
-    for model in models:
-        if model not in COMPLIANT:
-            continue
-        ref = run(sc, model, "me", rtol=ref_rtol, output_times=grid)
-        half = run(sc, model, "me", rtol=ref_rtol / 2, output_times=grid)
-        refs[model] = ref
-        study.references[model] = f"ME CVode rtol {ref_rtol:g} (check: {ref_rtol / 2:g})"
-        study.reference_checks[model] = _reference_change(half, ref, t_end, radius)
-        for integ in INTEGRATORS:
-            for setting in settings.get(integ, []):
-                study.points.append(
-                    _measure(sc, model, integ, setting, ref, grid, t_end, radius, repeats, ref_rtol)
-                )
-                step()
+    refs = {m: _compliant(study, sc, m, settings, ctx, step) for m in models if m in COMPLIANT}
     if "Moreau" in models:
-        dt = sc.integrator.output_interval
-        ref = run(sc, "Moreau", "core", h=ref_moreau_h, output_interval=dt)
-        half = run(sc, "Moreau", "core", h=ref_moreau_h / 2, output_interval=dt)
-        study.references["Moreau"] = f"Moreau h = {ref_moreau_h:g} s (check: {ref_moreau_h / 2:g})"
-        change = _reference_change(half, ref, t_end, radius)
-        study.reference_checks["Moreau"] = {m: change[m] for m in RIGID_METRICS}
-        compliant_ref = refs.get("LN_spheres")
-        for h in settings.get("Moreau", []):
-            tr, wall = _median_run(partial(run, sc, "Moreau", "core", h=h), repeats)
-            study.points.append(
-                _point(
-                    "Moreau",
-                    "Moreau",
-                    h,
-                    f"h = {h:g} s",
-                    tr,
-                    wall,
-                    ref,
-                    t_end,
-                    radius,
-                    RIGID_METRICS,
-                )
-            )
-            if compliant_ref is not None:
-                study.points.append(
-                    _point(
-                        "Moreau",
-                        "Moreau",
-                        h,
-                        f"h = {h:g} s",
-                        tr,
-                        wall,
-                        compliant_ref,
-                        t_end,
-                        radius,
-                        RIGID_METRICS,
-                        vs="LN_spheres",
-                    )
-                )
-            step()
+        _moreau(study, sc, settings, ctx, refs.get("LN_spheres"), step)
     progress.close()
     mark_unresolved(study)
     return study

@@ -99,36 +99,50 @@ def _has_nan(tr: Trajectory) -> bool:
     return any(not np.all(np.isfinite(v)) for k, v in tr.table.items() if k != "mode")
 
 
-def evaluate(case: Case, model: str, integ: str) -> Run:
-    tr, error, wall = _run_one(case, model, integ)
+def _rk4_limit(case: Case, model: str, integ: str) -> str:
+    """Why the paper's RK4 cannot resolve the case's contact (fewer than ten steps of h0), or
+    "" if it can (or the run is not RK4's)."""
     t_c = case.t_contact_by_model.get(model, case.t_contact)
-    rk4_limit = integ == "RK4" and t_c is not None and t_c < 10 * RK4_H0
-    limit_reason = (
-        (
+    if integ == "RK4" and t_c is not None and t_c < 10 * RK4_H0:
+        return (
             f"the paper's RK4 with h0 = {RK4_H0:g} s cannot resolve a contact of "
             f"{t_c:.2g} s (fewer than ten steps)"
         )
-        if rk4_limit
-        else ""
-    )
+    return ""
+
+
+def _with(reason: str, limit: str) -> str:
+    return reason + (f"; {limit}" if limit else "")
+
+
+def _energy_verdict(
+    integ: str, gain: float, tol_E: float, E0: float, rk4_limit: str
+) -> tuple[str, str]:
+    """(verdict, reason) of a run that gained more energy than allowed: RK4's truncation error
+    is a documented limit, anything else a failure."""
+    reason = f"energy gained: {gain:.3g} J (allowed {tol_E:.2g} J)"
+    limit = rk4_limit
+    truncation = integ == "RK4" and gain <= 1e-3 * E0
+    if truncation and not rk4_limit:
+        limit = (
+            "explicit RK4 does not conserve energy: a gain of "
+            f"{gain / E0:.1e} of the energy is its truncation error at "
+            f"h0 = {RK4_H0:g} s"
+        )
+    return ("limit" if limit else "fail"), _with(reason, limit)
+
+
+def evaluate(case: Case, model: str, integ: str) -> Run:
+    tr, error, wall = _run_one(case, model, integ)
+    rk4_limit = _rk4_limit(case, model, integ)
+    verdict_if_not_ok = "limit" if rk4_limit else "fail"
     if tr is None:
-        verdict = "limit" if rk4_limit else "fail"
         return Run(
-            case.name,
-            model,
-            integ,
-            verdict,
-            f"stopped: {error}" + (f"; {limit_reason}" if rk4_limit else ""),
-            wall,
+            case.name, model, integ, verdict_if_not_ok, _with(f"stopped: {error}", rk4_limit), wall
         )
     if _has_nan(tr):
         return Run(
-            case.name,
-            model,
-            integ,
-            "limit" if rk4_limit else "fail",
-            "NaN in the output" + (f"; {limit_reason}" if rk4_limit else ""),
-            wall,
+            case.name, model, integ, verdict_if_not_ok, _with("NaN in the output", rk4_limit), wall
         )
     E0 = abs(float(tr.table["energy"][0])) + 1e-12
     gain = _energy_gain(tr)
@@ -142,35 +156,12 @@ def evaluate(case: Case, model: str, integ: str) -> Run:
     ok, why, more = case.check(tr, model, integ)
     details.update(more)
     if gain > tol_E:
-        reason = f"energy gained: {gain:.3g} J (allowed {tol_E:.2g} J)"
-        truncation = integ == "RK4" and gain <= 1e-3 * E0
-        if truncation and not rk4_limit:
-            limit_reason = (
-                "explicit RK4 does not conserve energy: a gain of "
-                f"{gain / E0:.1e} of the energy is its truncation error at "
-                f"h0 = {RK4_H0:g} s"
-            )
-        return Run(
-            case.name,
-            model,
-            integ,
-            "limit" if rk4_limit or truncation else "fail",
-            reason + (f"; {limit_reason}" if rk4_limit or truncation else ""),
-            wall,
-            details,
-        )
+        verdict, reason = _energy_verdict(integ, gain, tol_E, E0, rk4_limit)
+        return Run(case.name, model, integ, verdict, reason, wall, details)
     if not ok:
         verdict = "limit" if rk4_limit or why.startswith("limit:") else "fail"
-        why = why.removeprefix("limit: ")
-        return Run(
-            case.name,
-            model,
-            integ,
-            verdict,
-            why + (f"; {limit_reason}" if rk4_limit else ""),
-            wall,
-            details,
-        )
+        reason = _with(why.removeprefix("limit: "), rk4_limit)
+        return Run(case.name, model, integ, verdict, reason, wall, details)
     return Run(case.name, model, integ, "pass", why, wall, details)
 
 

@@ -130,14 +130,10 @@ SENSITIVITY = (
 )
 
 
-def analyse(
-    spec: SweepSpec, tasks: Sequence[Task], store: ResultStore, settings: MeasureSettings
+def _runs(
+    spec: SweepSpec, by_meta: dict[Any, Task], store: ResultStore, measures: dict[str, Any]
 ) -> dict[str, Any]:
-    """Every number of the sweep (JSON-ready): per model, parameter, direction and output, the
-    group levels beside the paper's, and how the agreement moves with each threshold."""
-    by_meta = index_tasks(tasks)
-    signals = load_signals(tasks, store)
-    measures = measure(spec, tasks, signals, settings)
+    """Per model and parameter: the combined measures and each direction's run and measures."""
     runs: dict[str, Any] = {}
     for model in spec.models:
         runs[model] = {}
@@ -152,12 +148,24 @@ def analyse(
                     "summary": store.summary(task.key),
                     "outputs": m[d],
                 }
-    groups = group_levels(spec, measures)
+    return runs
+
+
+def _comparison(spec: SweepSpec, groups: dict[str, Any]) -> dict[str, Any]:
+    """Each group's levels against the paper's (and against its own reading, where a row has
+    one)."""
     comparison = {g: compare_with_paper(g, groups[g]) for g in groups}
     if any(ALL_PARAMETERS[k].paper_row for k in spec.parameters):
         for g in groups:
             comparison[f"{g}, paper's reading"] = compare_with_paper(g, groups[g], "paper")
-    sensitivity = []
+    return comparison
+
+
+def _sensitivity(
+    spec: SweepSpec, tasks: Sequence[Task], signals: Any, settings: MeasureSettings
+) -> list[dict[str, Any]]:
+    """How the agreement with the paper moves with each threshold (SENSITIVITY)."""
+    rows = []
     for name, values in SENSITIVITY:
         for value in values:
             alt = replace(settings, **{name: value})
@@ -166,27 +174,42 @@ def analyse(
             for g in alt_groups:
                 c = compare_with_paper(g, alt_groups[g])
                 row[g] = {k: c[k] for k in ("agree", "higher", "lower", "within_one", "total")}
-            sensitivity.append(row)
+            rows.append(row)
+    return rows
+
+
+def _parameter(spec: SweepSpec, key: str) -> dict[str, Any]:
+    p = ALL_PARAMETERS[key]
+    return {
+        "symbol": p.symbol,
+        "variables": list(p.variables),
+        "delta": p.delta,
+        "step": p.step_text,
+        "note": p.note,
+        "rest_shift_m": [list(rest_shift(spec.scene, p, d)) for d in (+1, -1)]
+        if p.rest_shift
+        else None,
+    }
+
+
+def analyse(
+    spec: SweepSpec, tasks: Sequence[Task], store: ResultStore, settings: MeasureSettings
+) -> dict[str, Any]:
+    """Every number of the sweep (JSON-ready): per model, parameter, direction and output, the
+    group levels beside the paper's, and how the agreement moves with each threshold."""
+    by_meta = index_tasks(tasks)
+    signals = load_signals(tasks, store)
+    measures = measure(spec, tasks, signals, settings)
+    runs = _runs(spec, by_meta, store, measures)
+    groups = group_levels(spec, measures)
+    comparison = _comparison(spec, groups)
+    sensitivity = _sensitivity(spec, tasks, signals, settings)
     return {
         "settings": asdict(settings),
         "horizon": spec.stop_time,
         "t_early": settings.early_fraction * spec.stop_time,
         "models": list(spec.models),
-        "parameters": {
-            key: {
-                "symbol": ALL_PARAMETERS[key].symbol,
-                "variables": list(ALL_PARAMETERS[key].variables),
-                "delta": ALL_PARAMETERS[key].delta,
-                "step": ALL_PARAMETERS[key].step_text,
-                "note": ALL_PARAMETERS[key].note,
-                "rest_shift_m": [
-                    list(rest_shift(spec.scene, ALL_PARAMETERS[key], d)) for d in (+1, -1)
-                ]
-                if ALL_PARAMETERS[key].rest_shift
-                else None,
-            }
-            for key in spec.parameters
-        },
+        "parameters": {key: _parameter(spec, key) for key in spec.parameters},
         "nominal": {m: store.summary(by_meta[(m, None, 0)].key) for m in spec.models},
         "runs": runs,
         "levels": {

@@ -52,24 +52,47 @@ def influence(
     lo_b, hi_b = _sliding(b, w, minimum_filter1d), _sliding(b, w, maximum_filter1d)
     out = (b < lo_a - tol) | (b > hi_a + tol) | (a < lo_b - tol) | (a > hi_b + tol)
     t_dep = float(t[int(np.argmax(out))]) if np.any(out) else None
-    rms = float(np.sqrt(np.mean((b - a) ** 2))) if len(a) else 0.0
-    den = float(np.sqrt(np.var(a) + np.var(b))) if len(a) else 0.0
-    nrms = rms / den if den > 0 else (0.0 if rms == 0 else 1.0)
-    pa, pb = float(np.max(np.abs(a))), float(np.max(np.abs(b)))
-    peak_change = (pb - pa) / pa if pa > 0 else (0.0 if pb == 0 else math.inf)
-    if max_diff == 0.0 or (scale > 0 and max_diff <= s.none_rel * scale):
-        level = 0
-    elif t_dep is not None and t_dep - t[0] <= s.early_fraction * horizon:
-        level = 3
-    elif t_dep is not None and nrms >= s.nrms_medium:
-        level = 2
-    else:
-        level = 1
+    nrms = _nrms(a, b)
     return {
         "t_dep": t_dep,
         "nrms": nrms,
-        "max_dev": max_diff / scale if scale > 0 else (0.0 if max_diff == 0 else math.inf),
-        "peak_change": peak_change,
+        "max_dev": _ratio(max_diff, scale, 0.0 if max_diff == 0 else math.inf),
+        "peak_change": _peak_change(a, b),
         "scale": scale,
-        "level": level,
+        "level": _level(s, max_diff, scale, t_dep, t[0], horizon, nrms),
     }
+
+
+def _ratio(x: float, y: float, otherwise: float) -> float:
+    return x / y if y > 0 else otherwise
+
+
+def _nrms(a: np.ndarray, b: np.ndarray) -> float:
+    """RMS(b - a) / sqrt(var a + var b): 0 for identical signals, 1 for a zero spread."""
+    rms = float(np.sqrt(np.mean((b - a) ** 2))) if len(a) else 0.0
+    den = float(np.sqrt(np.var(a) + np.var(b))) if len(a) else 0.0
+    return _ratio(rms, den, 0.0 if rms == 0 else 1.0)
+
+
+def _peak_change(a: np.ndarray, b: np.ndarray) -> float:
+    pa, pb = float(np.max(np.abs(a))), float(np.max(np.abs(b)))
+    return (pb - pa) / pa if pa > 0 else (0.0 if pb == 0 else math.inf)
+
+
+def _level(
+    s: MeasureSettings,
+    max_diff: float,
+    scale: float,
+    t_dep: float | None,
+    t0: float,
+    horizon: float,
+    nrms: float,
+) -> int:
+    """The level of the module docstring: 0 none, 1 low, 2 medium, 3 high."""
+    if max_diff == 0.0 or (scale > 0 and max_diff <= s.none_rel * scale):
+        return 0
+    if t_dep is not None and t_dep - t0 <= s.early_fraction * horizon:
+        return 3
+    if t_dep is not None and nrms >= s.nrms_medium:
+        return 2
+    return 1

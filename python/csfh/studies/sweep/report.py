@@ -126,10 +126,7 @@ def _sensitivity_table(result: dict[str, Any]) -> list[str]:
     return [*lines, ""]
 
 
-def write_markdown(
-    path: Path, result: dict[str, Any], run_info: dict[str, Any], figures: Sequence[Path]
-) -> Path:
-    s = result["settings"]
+def _what_was_run(result: dict[str, Any], run_info: dict[str, Any]) -> list[str]:
     T = result["horizon"]
     lines = [
         f"# Parametric analysis of the paper's Tables 4 and 5 — scene `{run_info['scene']}`",
@@ -159,7 +156,12 @@ def write_markdown(
             dx, dy = p["rest_shift_m"][0]
             note += f"; +step: Δr0 = [{1e3 * dx:+.2f}, {1e3 * dy:+.2f}] mm"
         lines.append(f"| {p['symbol']} | {', '.join(p['variables'])} | {p['step']} | {note} |")
-    lines += [
+    return lines
+
+
+def _influence_measure(result: dict[str, Any]) -> list[str]:
+    s = result["settings"]
+    return [
         "",
         "## The influence measure",
         "",
@@ -201,6 +203,34 @@ def write_markdown(
         "## Our table beside the paper's",
         "",
     ]
+
+
+def _nominal_runs(result: dict[str, Any]) -> list[str]:
+    lines = [
+        "## Nominal runs",
+        "",
+        "| model | first contact [s] | contacts | peak F_N [N] | peak abs F_T [N] | steps |",
+        "|---|---|---|---|---|---|",
+    ]
+    for model, sm in result["nominal"].items():
+        first = "—" if sm["first_contact"] is None else f"{sm['first_contact']:.6f}"
+        lines.append(
+            f"| {model} | {first} | {sm['contacts']} | {sm['peak_F_N']:.4g} | "
+            f"{sm['peak_abs_F_T']:.4g} | {sm['steps']} |"
+        )
+    return [
+        *lines,
+        "",
+        "Moreau's F_N and F_T are impulses divided by h (the largest per step in each output "
+        "interval): they scale as 1/h and are compared only with Moreau's own nominal run.",
+        "",
+    ]
+
+
+def write_markdown(
+    path: Path, result: dict[str, Any], run_info: dict[str, Any], figures: Sequence[Path]
+) -> Path:
+    lines = [*_what_was_run(result, run_info), *_influence_measure(result)]
     for group in result["groups"]:
         lines += _group_table(result, group)
         lines += ["Disagreements:", "", *_disagreements(result, group)]
@@ -213,24 +243,7 @@ def write_markdown(
     lines += ["## Per model", ""]
     for model in result["models"]:
         lines += _per_model_table(result, model)
-    lines += [
-        "## Nominal runs",
-        "",
-        "| model | first contact [s] | contacts | peak F_N [N] | peak abs F_T [N] | steps |",
-        "|---|---|---|---|---|---|",
-    ]
-    for model, sm in result["nominal"].items():
-        first = "—" if sm["first_contact"] is None else f"{sm['first_contact']:.6f}"
-        lines.append(
-            f"| {model} | {first} | {sm['contacts']} | {sm['peak_F_N']:.4g} | "
-            f"{sm['peak_abs_F_T']:.4g} | {sm['steps']} |"
-        )
-    lines += [
-        "",
-        "Moreau's F_N and F_T are impulses divided by h (the largest per step in each output "
-        "interval): they scale as 1/h and are compared only with Moreau's own nominal run.",
-        "",
-    ]
+    lines += _nominal_runs(result)
     return write_text(path, "\n".join(lines))
 
 

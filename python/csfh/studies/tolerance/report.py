@@ -105,10 +105,24 @@ def write_markdown(
             f"| {k} | {study.nominal[k]:.6g} {units.get(k, '')} | "
             f"{d.describe(units.get(k, ''))} | {st['mean']:.6g} | {st['std']:.3g} |"
         )
+    lines += ["", f"![histograms]({figure.name})", "", *_statistics(result)]
+    lines += _correlations(study, result)
     lines += [
         "",
-        f"![histograms]({figure.name})",
+        "Peaks: event-driven models take the largest value over every CVODE step "
+        "(model exchange); Moreau's are the largest impulse / h of a step (they scale as "
+        "1/h). F_T of Moreau is the friction impulse of the step with the largest normal "
+        "impulse in each output interval.",
         "",
+    ]
+    if run_info.get("notes"):
+        lines += [run_info["notes"].rstrip(), ""]
+    return write_text(path, "\n".join(lines))
+
+
+def _statistics(result: dict[str, Any]) -> list[str]:
+    """Per model, each quantity's nominal value and spread, and the contact count's."""
+    lines = [
         "| model | quantity | nominal | mean | σ | 5 % | 95 % | min | max |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
@@ -132,7 +146,11 @@ def write_markdown(
             f"{c['mean']:.3g} | {c['std']:.3g} | {c['p05']:.3g} | {c['p95']:.3g} | "
             f"{c['min']:.0f} | {c['max']:.0f} |"
         )
-    lines += [
+    return lines
+
+
+def _correlations(study: ToleranceStudy, result: dict[str, Any]) -> list[str]:
+    lines = [
         "",
         "Which tolerance drives the spread (Pearson correlation of each sampled "
         "parameter with the result, over the runs):",
@@ -147,17 +165,7 @@ def write_markdown(
                 for k in study.tolerances
             ]
             lines.append(f"| {model} | {LABELS[q][0]} | " + " | ".join(cells) + " |")
-    lines += [
-        "",
-        "Peaks: event-driven models take the largest value over every CVODE step "
-        "(model exchange); Moreau's are the largest impulse / h of a step (they scale as "
-        "1/h). F_T of Moreau is the friction impulse of the step with the largest normal "
-        "impulse in each output interval.",
-        "",
-    ]
-    if run_info.get("notes"):
-        lines += [run_info["notes"].rstrip(), ""]
-    return write_text(path, "\n".join(lines))
+    return lines
 
 
 def write_json_report(

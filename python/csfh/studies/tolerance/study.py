@@ -75,6 +75,11 @@ class ToleranceStudy:
     nominal: dict[str, float] = field(default_factory=dict)
 
 
+def _finite(value: Any) -> bool:
+    """A finite number (not a boolean)."""
+    return not isinstance(value, bool) and isinstance(value, int | float) and math.isfinite(value)
+
+
 def _parse_distribution(key: str, spec: Any) -> Distribution:
     where = f"tolerance.{key!r}"
     if not isinstance(spec, dict):
@@ -88,17 +93,10 @@ def _parse_distribution(key: str, spec: Any) -> Distribution:
     if len(kinds) != 1:
         raise ToleranceError(f"{where} needs exactly one of sigma (normal) or half_width (uniform)")
     width = spec[kinds[0]]
-    if (
-        isinstance(width, bool)
-        or not isinstance(width, int | float)
-        or not math.isfinite(width)
-        or width <= 0
-    ):
+    if not _finite(width) or width <= 0:
         raise ToleranceError(f"{where}: {kinds[0]} = {width!r} must be a number > 0")
     mean = spec.get("mean")
-    if mean is not None and (
-        isinstance(mean, bool) or not isinstance(mean, int | float) or not math.isfinite(mean)
-    ):
+    if mean is not None and not _finite(mean):
         raise ToleranceError(f"{where}: mean = {mean!r} must be a finite number")
     return Distribution(
         "normal" if kinds[0] == "sigma" else "uniform",
@@ -323,6 +321,42 @@ def _stats(v: np.ndarray) -> dict[str, Any]:
     }
 
 
+def _correlations(X: np.ndarray, keys: list[str], values: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Per quantity, the Pearson correlation of each sampled parameter with it (None where
+    either does not vary or fewer than three runs have it)."""
+    corr: dict[str, dict[str, float | None]] = {}
+    for q in QUANTITIES:
+        corr[q] = {}
+        y = values[q]
+        ok = np.isfinite(y)
+        for j, k in enumerate(keys):
+            x = X[ok, j]
+            if ok.sum() > 2 and np.std(x) > 0 and np.std(y[ok]) > 0:
+                corr[q][k] = float(np.corrcoef(x, y[ok])[0, 1])
+            else:
+                corr[q][k] = None
+    return corr
+
+
+def _model(mt: list[Task], X: np.ndarray, keys: list[str], store: ResultStore) -> dict[str, Any]:
+    """One model's nominal run, statistics, contact counts and correlations."""
+    nominal = next(t for t in mt if dict(t.meta)["run"] == -1)
+    runs = sorted((t for t in mt if dict(t.meta)["run"] >= 0), key=lambda t: dict(t.meta)["run"])
+    values = {q: np.array([_num(store.summary(t.key)[q]) for t in runs]) for q in QUANTITIES}
+    contacts = np.array([store.summary(t.key)["contacts"] for t in runs])
+    return {
+        "nominal": store.summary(nominal.key),
+        "stats": {q: _stats(values[q]) for q in QUANTITIES},
+        "no_contact_runs": int(np.sum(~np.isfinite(values["first_contact"]))),
+        "contacts": _stats(contacts.astype(float)),
+        "contacts_values": [int(c) for c in contacts],
+        "correlation": _correlations(X, keys, values),
+        "values": {
+            q: [None if not math.isfinite(v) else float(v) for v in values[q]] for q in QUANTITIES
+        },
+    }
+
+
 def analyse(
     study: ToleranceStudy,
     samples: Sequence[dict[str, float]],
@@ -333,36 +367,7 @@ def analyse(
     X = np.array([[s[k] for k in keys] for s in samples]) if samples else np.zeros((0, len(keys)))
     out: dict[str, Any] = {"models": {}}
     for model in study.models:
-        mt = [t for t in tasks if t.model == model]
-        nominal = next(t for t in mt if dict(t.meta)["run"] == -1)
-        runs = sorted(
-            (t for t in mt if dict(t.meta)["run"] >= 0), key=lambda t: dict(t.meta)["run"]
-        )
-        values = {q: np.array([_num(store.summary(t.key)[q]) for t in runs]) for q in QUANTITIES}
-        contacts = np.array([store.summary(t.key)["contacts"] for t in runs])
-        corr: dict[str, dict[str, float | None]] = {}
-        for q in QUANTITIES:
-            corr[q] = {}
-            y = values[q]
-            ok = np.isfinite(y)
-            for j, k in enumerate(keys):
-                x = X[ok, j]
-                if ok.sum() > 2 and np.std(x) > 0 and np.std(y[ok]) > 0:
-                    corr[q][k] = float(np.corrcoef(x, y[ok])[0, 1])
-                else:
-                    corr[q][k] = None
-        out["models"][model] = {
-            "nominal": store.summary(nominal.key),
-            "stats": {q: _stats(values[q]) for q in QUANTITIES},
-            "no_contact_runs": int(np.sum(~np.isfinite(values["first_contact"]))),
-            "contacts": _stats(contacts.astype(float)),
-            "contacts_values": [int(c) for c in contacts],
-            "correlation": corr,
-            "values": {
-                q: [None if not math.isfinite(v) else float(v) for v in values[q]]
-                for q in QUANTITIES
-            },
-        }
+        out["models"][model] = _model([t for t in tasks if t.model == model], X, keys, store)
     out["samples"] = {k: [s[k] for s in samples] for k in keys}
     out["sample_stats"] = {k: _stats(np.array([s[k] for s in samples])) for k in keys}
     return out
