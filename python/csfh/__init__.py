@@ -22,10 +22,12 @@ checks it):
 * ``csfh.cosim``: co-simulation of the hinge with the comb-drive actuator;
 * ``csfh.batch``: many runs of one scene (tasks, result store, executors);
 * ``csfh.runners``: one run of one model (the FMU, Moreau, RK4) -> a `Trajectory`, and batches
-  of runs (Moreau in the C core, co-simulation in the FMU's own binary);
+  of runs (Moreau in the C core, co-simulation in the FMU's own binary), behind one protocol
+  (``csfh.runners.registry``);
 * ``csfh.model``: what the model is (the FMUs' interfaces, presets, scenes, the C core);
-* foundation: ``paths`` (where the binaries are), ``errors``, ``trajectory``, ``output`` (every
-  file written), ``progress``, ``plotting``.
+* foundation: ``errors`` (what a user is told: csfh.CsfhError and its kinds), ``paths`` (where
+  the binaries are), ``trajectory``, ``output`` (every file written), ``progress``,
+  ``plotting``.
 
 The names below are imported on first use, so that ``import csfh`` (and ``csfh --help``) stays
 fast.
@@ -42,7 +44,7 @@ if TYPE_CHECKING:
     from .cosim.coupling import CosimError
     from .cosim.run import cosimulate
     from .cosim.ssp import ssp_path, write_ssp
-    from .errors import SceneError, SimulationError
+    from .errors import CsfhError, ParameterError, SceneError, SimulationError
     from .model.scene import IntegratorSettings, Scene, load_scene, scene_from_dict
     from .paths import batch_library_path, combdrive_fmu_path, core_library_path, fmu_path
     from .runners.cs_batch import CsBatchResult, cs_batch
@@ -55,7 +57,9 @@ _PUBLIC = {
     "Comparison": "csfh.studies.compare",
     "CosimError": "csfh.cosim.coupling",
     "CsBatchResult": "csfh.runners.cs_batch",
+    "CsfhError": "csfh.errors",
     "IntegratorSettings": "csfh.model.scene",
+    "ParameterError": "csfh.errors",
     "Scene": "csfh.model.scene",
     "SceneError": "csfh.errors",
     "SimulationError": "csfh.errors",
@@ -80,7 +84,9 @@ __all__ = [
     "Comparison",
     "CosimError",
     "CsBatchResult",
+    "CsfhError",
     "IntegratorSettings",
+    "ParameterError",
     "Scene",
     "SceneError",
     "SimulationError",

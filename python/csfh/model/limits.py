@@ -68,12 +68,16 @@ def check_horizon(
         )
 
 
+def _positive(prefix: str, **values: float) -> None:
+    for name, value in values.items():
+        if not (value > 0 and math.isfinite(value)):
+            raise ParameterError(f"{prefix}{name} = {value!r} must be a finite number > 0")
+
+
 def check_rows(t_end: float, step: float, what: str) -> int:
     """The number of output rows of a run on a grid of `step` up to `t_end`, at most
     MAX_OUTPUT_SAMPLES; ParameterError naming the values otherwise."""
-    for name, value in (("stop_time", t_end), (what, step)):
-        if not (value > 0 and math.isfinite(value)):
-            raise ParameterError(f"{name} = {value!r} must be a finite number > 0")
+    _positive("", **{"stop_time": t_end, what: step})
     if not t_end / step <= MAX_OUTPUT_SAMPLES:
         raise ParameterError(
             f"{what} = {step:g} s gives {t_end / step:.3g} output rows over {t_end:g} s; at most "
@@ -86,9 +90,7 @@ def moreau_step_counts(t_end: float, h: float, dt_out: float) -> tuple[int, int,
     """(steps, steps per output row, rows to allocate) of a Moreau run: at least one step, at
     most MAX_MOREAU_STEPS steps and MAX_OUTPUT_SAMPLES rows; ParameterError naming the values
     otherwise."""
-    for name, value in (("stop_time", t_end), ("h", h), ("output_interval", dt_out)):
-        if not (value > 0 and math.isfinite(value)):
-            raise ParameterError(f"Moreau: {name} = {value!r} must be a finite number > 0")
+    _positive("Moreau: ", stop_time=t_end, h=h, output_interval=dt_out)
     if not t_end / h <= MAX_MOREAU_STEPS:
         raise ParameterError(
             f"Moreau: h = {h:g} s gives {t_end / h:.3g} steps over {t_end:g} s; at most "

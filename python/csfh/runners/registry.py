@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
@@ -103,19 +103,17 @@ class TrajectoryRuns:
         return float(self.runs[i].stats.get("wall_time", 0.0))
 
 
-class ModelExchange:
-    interface: str = "me"
-    models: tuple[str, ...] = model_info.LAWS
+class _OneByOne:
+    """A runner without batches: `run_many` is one `run` per parameter set."""
+
     batches: bool = False
     same_parameters: bool = False
-    exclusive: bool = True
+    run_many_options: ClassVar[dict[str, Any]] = {}
 
     def run(
         self, scene: Scene, model: str, *, progress: Progress | None = None, **options: Any
     ) -> Trajectory:
-        from .model_exchange import simulate_me
-
-        return simulate_me(scene, model, progress=progress, **options)
+        raise NotImplementedError
 
     def run_many(
         self,
@@ -127,21 +125,40 @@ class ModelExchange:
         output_interval: float,
         record: bool,
     ) -> Runs:
-        from .model_exchange import simulate_me
-
+        options: dict[str, Any] = {"stop_time": stop_time, "output_interval": output_interval}
         return TrajectoryRuns(
             [
-                simulate_me(
-                    scene,
-                    model,
-                    stop_time=stop_time,
-                    output_interval=output_interval,
-                    parameters=p,
-                    max_step_records=RUN_MANY_STEP_RECORDS,
-                )
+                self.run(scene, model, parameters=p, **options, **self.run_many_options)
                 for p in parameter_sets
             ]
         )
+
+
+class ModelExchange(_OneByOne):
+    interface: str = "me"
+    models: tuple[str, ...] = model_info.LAWS
+    exclusive: bool = True
+    run_many_options: ClassVar[dict[str, Any]] = {"max_step_records": RUN_MANY_STEP_RECORDS}
+
+    def run(
+        self, scene: Scene, model: str, *, progress: Progress | None = None, **options: Any
+    ) -> Trajectory:
+        from .model_exchange import simulate_me
+
+        return simulate_me(scene, model, progress=progress, **options)
+
+
+class Rk4(_OneByOne):
+    interface: str = "rk4"
+    models: tuple[str, ...] = model_info.LAWS
+    exclusive: bool = False
+
+    def run(
+        self, scene: Scene, model: str, *, progress: Progress | None = None, **options: Any
+    ) -> Trajectory:
+        from .rk4 import rk4_event
+
+        return rk4_event(scene, model, **options)
 
 
 class CoSimulation:
@@ -188,42 +205,6 @@ class CoSimulation:
             stop_time=stop_time,
             communication_step=output_interval,
             record=record,
-        )
-
-
-class Rk4:
-    interface: str = "rk4"
-    models: tuple[str, ...] = model_info.LAWS
-    batches: bool = False
-    same_parameters: bool = False
-    exclusive: bool = False
-
-    def run(
-        self, scene: Scene, model: str, *, progress: Progress | None = None, **options: Any
-    ) -> Trajectory:
-        from .rk4 import rk4_event
-
-        return rk4_event(scene, model, **options)
-
-    def run_many(
-        self,
-        scene: Scene,
-        model: str,
-        parameter_sets: Sequence[dict[str, Any] | None],
-        *,
-        stop_time: float,
-        output_interval: float,
-        record: bool,
-    ) -> Runs:
-        from .rk4 import rk4_event
-
-        return TrajectoryRuns(
-            [
-                rk4_event(
-                    scene, model, stop_time=stop_time, output_interval=output_interval, parameters=p
-                )
-                for p in parameter_sets
-            ]
         )
 
 
