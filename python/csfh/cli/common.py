@@ -1,9 +1,10 @@
 """What every command of the command line shares: the one-line error, the help layout (every
 command has a description, every option its default), argument types and the output directory.
 
-Command modules import only the standard library and this module at their top (which takes the
-built-in scenes' names from csfh.scenes, a tuple); everything else is imported inside the
-command, so that `csfh --help` starts in a fraction of a second."""
+Command modules import only the standard library, this module and constants of light modules at
+their top (this module takes the one-line error from csfh.errors and the built-in scenes' names
+from csfh.scenes; cli/shock.py its default from csfh.studies.shock); everything else is imported
+inside the command, so that `csfh --help` starts in a fraction of a second."""
 
 from __future__ import annotations
 
