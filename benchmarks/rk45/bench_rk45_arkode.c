@@ -1,5 +1,5 @@
 #define _POSIX_C_SOURCE 199309L
-/* Why the FMU has its own explicit Runge-Kutta 5(4) (fmu_src/fmi/rk45.c) instead of SUNDIALS
+/* Why the FMU has its own explicit Runge-Kutta 5(4) (fmu_src/solvers/rk45.c) instead of SUNDIALS
  * ARKODE's ERKStep with the same Dormand-Prince table: both integrate the central scene (body 1
  * dropped onto the bore, first three contacts, 0.42 s) in the same event loop as the FMU's
  * co-simulation (one step at a time, the state at every 10 ms communication point from the dense

@@ -1,5 +1,5 @@
-/* The comb-drive actuator behind the generic FMI glue (../fmi/fmu_model.h): no continuous states,
- * no events; the outputs follow the inputs (direct feedthrough). */
+/* The comb-drive actuator behind the generic FMU layer (../../fmu/fmu_model.h): no continuous
+ * states, no events; the outputs follow the inputs (direct feedthrough). */
 #include <stdio.h>
 
 #include "combdrive_model.h"

@@ -3,8 +3,8 @@
  * fmi2_glue.c (instance life cycle, state machine, get/set through the generated variable table,
  * model exchange, FMU state) and cosimulation.c (fmi2DoStep with CVODE) know nothing about the
  * physics: an FMU binary is the glue linked with one model adapter that defines the constant
- * `fmu_model` below. The csfh FMU's adapter is csfh_fmu_model.c, the comb-drive actuator's is
- * ../combdrive/combdrive_fmu_model.c.
+ * `fmu_model` below. The csfh FMU's adapter is ../models/csfh/csfh_fmu_model.c, the comb-drive
+ * actuator's is ../models/combdrive/combdrive_fmu_model.c.
  *
  * The model is one plain C struct (`size` bytes) holding everything: time, states, inputs,
  * parameters, derived quantities, discrete state and outputs. The generated variable table

@@ -1,8 +1,8 @@
 /* The FMI-independent part of an FMU instance (fmu_instance.h): shared by the FMI 2.0 and FMI 3.0
  * front-ends (fmi2_glue.c, fmi3_glue.c) and the co-simulation stepper (cosimulation.c).
- * Model-independent: the model is behind the interface of fmu_model.h (csfh: csfh_fmu_model.c,
- * physics in ../core; the comb-drive actuator: ../combdrive/). Messages name the FMI function the
- * importer called (`function`, given by the front-end). */
+ * Model-independent: the model is behind the interface of fmu_model.h (csfh: ../models/csfh/,
+ * physics in ../physics/; the comb-drive actuator: ../models/combdrive/). Messages name the FMI
+ * function the importer called (`function`, given by the front-end). */
 #include <float.h>
 #include <math.h>
 #include <stdbool.h>
