@@ -16,15 +16,6 @@ CSFH_INTERNAL_BEGIN
 #define CSFH_API __attribute__((visibility("default")))
 #else
 #define CSFH_API
-/* The paper's RK4 + bisection event-driven scheme (csfh_rk4event.h). stats: steps, rejected
- * steps, rhs evaluations, records, contacts. */
-CSFH_API int csfh_api_rk4_run(csfh_model_t *m, double h0, double tol, double h_min, double t0,
-                              const double x0[6], double t_end, double dt_out, double *records,
-                              size_t max_records, double *contacts, size_t max_contacts,
-                              double x_end[6], long long stats[5]);
-CSFH_API int csfh_api_rk4_record_columns(void);
-CSFH_API int csfh_api_contact_record_columns(void);
-
 #endif
 
 CSFH_API int csfh_api_abi_version(void);
