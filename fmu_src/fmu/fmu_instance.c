@@ -481,7 +481,7 @@ fmu_status_t fmu_exit_initialization(fmu_instance_t *inst, const char *function)
     if (msg[0] != '\0') {
         fmu_log(inst, FMU_OK, LOG_EVENTS, "%s", msg);
     }
-    inst->cvode_needs_reinit = 1;
+    inst->restart_integration = 1;
     step_reference(inst);
     return FMU_OK;
 }
@@ -699,7 +699,7 @@ fmu_status_t fmu_set_values(fmu_instance_t *inst, const char *function, const un
         inst->prepared = 0;
     }
     if (restart) {
-        inst->cvode_needs_reinit = 1;
+        inst->restart_integration = 1;
     }
     fmu_invalidate(inst);
     return FMU_OK;
@@ -906,7 +906,7 @@ fmu_status_t fmu_state_get(fmu_instance_t *inst, const char *function, void **st
      * and restoring restarts the integrator at the restored point. Restart it here as well, so
      * that the run continuing from this point and any re-run after restoring this state take the
      * same integrator path (identical results). */
-    inst->cvode_needs_reinit = 1;
+    inst->restart_integration = 1;
     *state = s;
     return FMU_OK;
 }
@@ -934,7 +934,7 @@ fmu_status_t fmu_state_set(fmu_instance_t *inst, const char *function, void *sta
     inst->prepared = prepared;
     inst->warned_outputs = s->warned_outputs;
     step_reference(inst);
-    inst->cvode_needs_reinit = 1;
+    inst->restart_integration = 1;
     fmu_invalidate(inst);
     return FMU_OK;
 }

@@ -55,7 +55,7 @@ enum {
     LOG_ALL = 1 << 3
 };
 
-typedef struct csfh_cvode csfh_cvode_t; /* opaque, cosimulation.c */
+typedef struct cs_integration cs_integration_t; /* opaque, cosim/cosimulation.c */
 typedef struct fmu_instance fmu_instance_t;
 
 /* What the instance asks of the co-simulation stepper (cosimulation.h: cs_stepper), set by the
@@ -100,9 +100,9 @@ struct fmu_instance {
     int event_mode_used;       /* FMI 3.0: the importer handles events in Event Mode */
     int early_return_allowed;  /* FMI 3.0: fmi3DoStep may return at an event */
     const fmu_stepper_t *stepper; /* NULL: none (nothing to free or flush) */
-    csfh_cvode_t *cvode;
-    int cvode_needs_reinit; /* restart the integrator: states, inputs or tunable parameters were
-                               changed from outside, an FMU state was taken or restored */
+    cs_integration_t *integration; /* the co-simulation integration (NULL: none yet) */
+    int restart_integration; /* restart it at the next step: states, inputs or tunable parameters
+                                were changed from outside, an FMU state was taken or restored */
     /* FMU states made by this instance (get, deserialize) and not yet freed: only these are
      * accepted, freeing the instance frees the rest */
     void **fmu_states;

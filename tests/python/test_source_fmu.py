@@ -27,6 +27,8 @@ CSFH_SOURCES = {
     "fmi2_glue.c",
     "fmu_instance.c",
     "cosimulation.c",
+    "integrator_rk45.c",
+    "integrator_cvode.c",
     "rk45.c",
     "csfh_fmu_model.c",
     "csfh_flexure.c",

@@ -618,7 +618,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
      * handled the event already (the switch is done, nothing changes here) */
     const int mode_changed = fmu_event_update(inst) != 0;
     if (mode_changed && inst->type == FMU_CS) {
-        inst->cvode_needs_reinit = 1;
+        inst->restart_integration = 1;
     }
     *discreteStatesNeedUpdate = false;
     *terminateSimulation = false;
