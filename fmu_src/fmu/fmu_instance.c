@@ -21,10 +21,10 @@ static void stepper_free(fmu_instance_t *inst)
     }
 }
 
-static void stepper_peaks_flush(fmu_instance_t *inst)
+static void stepper_flush(fmu_instance_t *inst)
 {
     if (inst->stepper != NULL) {
-        inst->stepper->peaks_flush(inst);
+        inst->stepper->flush(inst);
     }
 }
 
@@ -373,7 +373,7 @@ fmu_status_t fmu_update_outputs(fmu_instance_t *inst, const char *function)
     if (fmu_prepare(inst, function) != FMU_OK) {
         return FMU_ERROR;
     }
-    stepper_peaks_flush(inst); /* the peak outputs of the communication step */
+    stepper_flush(inst); /* the model's outputs over the communication step (peaks) */
     char msg[MSG_SIZE];
     msg[0] = '\0';
     const int status = fmu_model.outputs(inst->model, msg, sizeof(msg));
@@ -658,9 +658,10 @@ fmu_status_t fmu_set_values(fmu_instance_t *inst, const char *function, const un
         tunable = tunable || (v->causality == CSFH_CAUS_PARAMETER &&
                               !(inst->state & (FMU_INSTANTIATED | FMU_INITIALIZATION)));
     }
-    /* every value is valid: first the peaks of the communication step, with the values they
-     * were taken with (a parameter changes them; kept if the new ones are rolled back) */
-    stepper_peaks_flush(inst);
+    /* every value is valid: first the outputs over the communication step (peaks), with the
+     * values they were taken with (a parameter changes them; kept if the new ones are rolled
+     * back) */
+    stepper_flush(inst);
     void *saved = NULL;
     if (tunable) { /* tunable parameters while running: apply, re-validate, roll back on failure */
         saved = malloc(fmu_model.size);
@@ -900,7 +901,7 @@ fmu_status_t fmu_state_get(fmu_instance_t *inst, const char *function, void **st
     } else if (!state_owned(inst, s, function)) {
         return FMU_ERROR;
     }
-    stepper_peaks_flush(inst); /* the snapshot holds the peaks of the communication step */
+    stepper_flush(inst); /* the snapshot holds the outputs over the communication step */
     snapshot_take(inst, s);
     /* the integrator's history (step size, order, Nordsieck array) is not part of the snapshot,
      * and restoring restarts the integrator at the restored point. Restart it here as well, so

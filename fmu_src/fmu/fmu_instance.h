@@ -62,8 +62,9 @@ typedef struct fmu_instance fmu_instance_t;
  * FMI front-end that made the instance; the instance does not call the stepper otherwise, so
  * the dependencies go one way: front-end -> stepper -> instance -> model. */
 typedef struct {
-    void (*free)(fmu_instance_t *inst);        /* release the integrator (none: nothing) */
-    void (*peaks_flush)(fmu_instance_t *inst); /* bring the step's peak outputs up to date */
+    void (*free)(fmu_instance_t *inst);  /* release the integrator (none: nothing) */
+    /* bring the model's analysis of the communication step's integrator steps up to date */
+    void (*flush)(fmu_instance_t *inst);
 } fmu_stepper_t;
 
 /* The front-end's logger: passes a formatted message to the importer's callback. */

@@ -1,10 +1,11 @@
-/* The model interface of the generic FMI 2.0 glue.
+/* The model interface of the generic FMU layer.
  *
- * fmi2_glue.c (instance life cycle, state machine, get/set through the generated variable table,
- * model exchange, FMU state) and cosimulation.c (fmi2DoStep with CVODE) know nothing about the
- * physics: an FMU binary is the glue linked with one model adapter that defines the constant
- * `fmu_model` below. The csfh FMU's adapter is ../models/csfh/csfh_fmu_model.c, the comb-drive
- * actuator's is ../models/combdrive/combdrive_fmu_model.c.
+ * The instance (fmu_instance.c: life cycle, state machine, get/set through the generated variable
+ * table, model exchange, FMU state), the co-simulation stepper (cosim/cosimulation.c) and the FMI
+ * front-ends (fmi2/, fmi3/) know nothing about the physics: an FMU binary is that layer linked
+ * with one model adapter that defines the constant `fmu_model` below. The csfh FMU's adapter is
+ * ../models/csfh/csfh_fmu_model.c, the comb-drive actuator's is
+ * ../models/combdrive/combdrive_fmu_model.c.
  *
  * The model is one plain C struct (`size` bytes) holding everything: time, states, inputs,
  * parameters, derived quantities, discrete state and outputs. The generated variable table
@@ -32,7 +33,37 @@ CSFH_INTERNAL_BEGIN
 #define FMU_CS_ADAMS 2 /* CVODE: Adams-Moulton, fixed-point iteration */
 #define FMU_CS_RK45 3  /* explicit Runge-Kutta 5(4), Dormand-Prince (rk45.c) */
 
-#define FMU_MAX_PEAKS 4 /* peak outputs tracked by the co-simulation stepper (csfh: 4) */
+/* A finished integrator step of co-simulation, as the stepper hands it to the model's
+ * analyse_step (all times are the integrator's local times: the model's time is origin + t):
+ *   live   the integrator's last step, at every pass of the stepper's loop over it: new_step
+ *          when the pass took it, else a continuation (a root inside it, or the communication
+ *          point before its end); its dense output is the integrator's own, valid until the
+ *          next step. keep (NULL: the integrator cannot save its steps) asks the stepper to keep
+ *          the step for later: 1, or 0 if it cannot (then analyse it now). memory: the model's
+ *          memory of the live steps, zeroed at every restart of the integrator.
+ *   kept   a step kept earlier, handed over when the model's outputs are needed (an output read,
+ *          an FMU state taken, a value set) or the stepper's room is full: its dense output is
+ *          the saved record, `model` is the model struct as it was when the step was taken (its
+ *          discrete state), `previous` the step kept before it if this one continues it (it ends
+ *          where this one starts, uncut, in the same discrete state), cut where it stops
+ *          counting (tn, or an event that cut it short), memory the model's for this step,
+ *          zeroed when it was kept. */
+typedef struct fmu_step fmu_step_t;
+struct fmu_step {
+    int live, new_step;
+    double t0, tn, h; /* the step and its size */
+    double cut;
+    double rtol;      /* the integration's relative tolerance */
+    /* the state (k = 0) or its derivative (k = 1) at t in [t0, tn]: 0, or < 0 if unavailable */
+    int (*dense)(const fmu_step_t *step, double t, int k, double *out);
+    /* the state and its derivative at t0 and tn exactly as the integrator used them (NULL:
+     * unknown, interpolate) */
+    const double *y0, *f0, *y1, *f1;
+    const void *model;          /* kept: the model struct as the step saw it */
+    void *memory;               /* fmu_model.step_memory bytes */
+    const fmu_step_t *previous; /* kept */
+    int (*keep)(const fmu_step_t *step); /* live */
+};
 
 typedef struct {
     const char *guid;
@@ -79,27 +110,14 @@ typedef struct {
     /* The co-simulation method, FMU_CS_AUTO, FMU_CS_BDF, FMU_CS_ADAMS or FMU_CS_RK45 (NULL:
      * BDF). */
     int (*cs_method)(const void *m);
-    /* Peak outputs of co-simulation (all NULL and n_peaks 0: none): the co-simulation stepper
-     * tracks the largest values of n_peaks (<= FMU_MAX_PEAKS) quantities over each
-     * communication step on CVODE's interpolant. peaks_begin starts a communication step with
-     * the values at the current state (taken from the outputs when outputs_current, else
-     * evaluated), peak_values gives the quantities at state x with the current discrete state
-     * (returns 0, without evaluating, when they are all 0: nothing to track), peaks_add takes
-     * values in. */
-    int n_peaks;
-    void (*peaks_begin)(void *m, int outputs_current);
-    int (*peak_values)(void *m, const double *x, double *v);
-    void (*peaks_add)(void *m, const double *v);
-    /* The discrete state the peak quantities depend on (csfh: the contact mode and onset rate),
-     * peaks_state_size bytes: saved from m into `state`, and restored into m, so that a step can
-     * be analysed for its peaks after an event has changed it (NULL: every step is analysed
-     * when taken). */
-    size_t peaks_state_size;
-    void (*peaks_state_save)(const void *m, void *state);
-    void (*peaks_state_restore)(void *m, const void *state);
-    /* 1 if the peak quantities can be nonzero in the current discrete state (csfh: in the
-     * contact mode), 0 if peak_values would return 0 whatever the state (NULL: always 1). */
-    int (*peaks_tracked)(const void *m);
+    /* Outputs over each communication step of co-simulation (csfh: the peak outputs; all NULL
+     * and 0: none): comm_step_begins at the start of every communication step (the outputs are
+     * current at the state there if outputs_current), then every integrator step through
+     * analyse_step (fmu_step_t) with the part (from, to] of the communication step it covers;
+     * step_memory bytes of memory are kept with every step for the model. */
+    size_t step_memory;
+    void (*comm_step_begins)(void *m, int outputs_current);
+    void (*analyse_step)(void *m, const fmu_step_t *step, double from, double to);
     /* A restored FMU state (fmi2SetFMUstate, fmi2DeSerializeFMUstate): check the fields of the
      * model struct that are neither stored table variables (the glue checks those: finite, in
      * range) nor recomputed (derived quantities, outputs, derivative cache), e.g. counts that

@@ -50,8 +50,8 @@
  * but when they are read (fmi2GetReal, fmu_update_outputs), the event message is formatted only
  * when logEvents is on, and the peak outputs cost nothing outside the contact mode.
  *
- * FMI types: none. The peak analysis and cs_do_step use only the instance (fmu_instance.h: the
- * model, the log, its own status type) and the integrator interface: the FMI 2.0 and FMI 3.0
+ * FMI types: none. cs_do_step uses only the instance (fmu_instance.h: the model, the log, its own
+ * status type), the integrator interface and the kept steps: the FMI 2.0 and FMI 3.0
  * front-ends (fmi2_glue.c, fmi3_glue.c) call the same cs_do_step; FMI 3.0's early return is its
  * stop_at_event option (the step ends at the first contact onset or release).
  *
@@ -67,6 +67,7 @@
 #include "cosimulation.h"
 #include "fmu_instance.h"
 #include "integrator.h"
+#include "kept_steps.h"
 
 #define NX fmu_model.n_states
 #define MAX_EVENTS_PER_STEP 1000000L  /* guards against an endless chain of events */
@@ -94,22 +95,6 @@ enum {
     STEP_SWITCH = 3,
     STEP_FAILED = CS_STEP_FAILED
 };
-
-#define PEAK_LOG_MAX 64   /* RK45 steps kept for the peaks before they are analysed anyway */
-#define PEAK_SNAPSHOTS 8  /* discrete states kept for them (events in one communication step) */
-
-/* One RK45 step kept for the peak outputs (see the peak section). */
-typedef struct {
-    double t0, tn;     /* the step */
-    double t_cut;      /* where it stops counting: tn, or the event that cut it short */
-    int snapshot;      /* the model's discrete state it ran with: snap[snapshot] */
-    int start_done, end_done, analysed;
-    int start_valid, end_valid; /* the quantities are tracked there, values and slopes: */
-    double v0[FMU_MAX_PEAKS], s0[FMU_MAX_PEAKS], v1[FMU_MAX_PEAKS], s1[FMU_MAX_PEAKS];
-    int n_max;         /* the maxima inside it: times and values */
-    double max_t[FMU_MAX_PEAKS];
-    double max_v[FMU_MAX_PEAKS][FMU_MAX_PEAKS];
-} peak_record_t;
 
 /* An integrator of the run, made when it first runs and kept (CVODE's memory while RK45 runs). */
 typedef struct {
@@ -162,30 +147,13 @@ struct cs_integration {
     int holdoff;            /* non-stiff windows left before the next trial */
     int next_holdoff;
     double nonstiff_h;      /* mean step of the non-stiff method in the window before the trial */
-    /* peak outputs (fmu_model.n_peaks > 0, track_peaks): CVODE's steps, analysed when taken */
-    double *peak_y, *peak_dy; /* work arrays (NX) */
-    double peak_t;            /* the end of the last analysed step: */
-    int peak_slope_valid;     /* its slopes and values there are valid */
-    double peak_slope[FMU_MAX_PEAKS];
-    double peak_end_v[FMU_MAX_PEAKS];
-    int peak_n_max;           /* the maxima inside it: times and values */
-    double peak_max_t[FMU_MAX_PEAKS];
-    double peak_max_v[FMU_MAX_PEAKS][FMU_MAX_PEAKS];
-    /* ... RK45's steps, kept and analysed when the peaks are read (peak_log_*) */
+    /* the model's analysis of the steps (analyse_live, kept_steps.h) */
     double comm_start;        /* the communication step being taken: (comm_start, FMU time] */
-    void *peak_room;          /* one block, allocated at the first step kept, for: */
-    peak_record_t *log;       /* the steps that may still hold peaks of it, in order */
-    double *log_data;         /* their records (log_stride each) */
-    size_t log_stride;
-    const cs_integrator_ops_t *log_ops; /* the integrator whose records they are */
-    int log_n;                /* (up to PEAK_LOG_MAX) */
-    unsigned char *snap;      /* the discrete states the steps ran with (peaks_state_save) */
-    int snap_n;               /* (up to PEAK_SNAPSHOTS) */
-    int snap_stale;           /* the discrete state changed since the last copy */
-    void *scratch;            /* the model's own one while analysing */
+    void *live_memory;        /* the model's memory of the live steps (step_memory bytes) */
+    kept_steps_t kept;
     double origin;      /* s: the integrator's time 0 (see the top of this file); its times are local */
     long warnings;      /* CVODE warnings so far (integrator_message) */
-    double arrays[];    /* y, abstol, y_root, peak_y, peak_dy: one block with the struct */
+    double arrays[];    /* y, abstol, y_root: one block with the struct */
 };
 
 /* ------------------------------------------------------------------------------------------ */
@@ -254,7 +222,8 @@ void cs_free(fmu_instance_t *inst)
             cs->integrators[i].ops->free(cs->integrators[i].self);
         }
     }
-    free(cs->peak_room);
+    kept_free(&cs->kept);
+    free(cs->live_memory);
     free(cs);
     inst->integration = NULL;
 }
@@ -457,18 +426,20 @@ static const method_t *configured_method(const fmu_instance_t *inst)
 static cs_integration_t *integration_new(fmu_instance_t *inst)
 {
     cs_integration_t *cs =
-        (cs_integration_t *)calloc(1, sizeof(*cs) + 5 * (size_t)NX * sizeof(double));
-    if (cs == NULL) {
+        (cs_integration_t *)calloc(1, sizeof(*cs) + 3 * (size_t)NX * sizeof(double));
+    void *live_memory = fmu_model.step_memory > 0 ? calloc(1, fmu_model.step_memory) : NULL;
+    if (cs == NULL || (fmu_model.step_memory > 0 && live_memory == NULL)) {
+        free(cs);
+        free(live_memory);
         fmu_log(inst, FMU_ERROR, LOG_STATUS_ERROR, "%s: out of memory", inst->step_function);
         return NULL;
     }
+    cs->live_memory = live_memory;
     cs->tolerance = inst->tolerance;
     double *p = cs->arrays;
     cs->y = p, p += NX;
     cs->abstol = p, p += NX;
-    cs->y_root = p, p += NX;
-    cs->peak_y = p, p += NX;
-    cs->peak_dy = p;
+    cs->y_root = p;
     int k = 0;
     for (int i = 0; i < fmu_model.n_variables && k < NX; i++) {
         if (fmu_model.variables[i].is_state) {
@@ -525,496 +496,68 @@ static long count_steps(fmu_instance_t *inst)
 }
 
 /* ------------------------------------------------------------------------------------------ */
-/* peak outputs: the largest values of the model's peak quantities over the communication step,
- * on the integrator's interpolant (the dense output of each step). Every step is analysed once:
- * its end values, and every maximum inside it (the quantity's slope + at the step's start, <= 0
- * at its end). Each communication step then takes the maxima that lie in it and the end values
- * of the steps that end in it; the values at the communication points themselves are the
- * outputs there (the model's outputs take the max with the step's peaks). Outside the contact
- * mode the model has nothing to track and nothing is evaluated.
- *
- * When: CVODE's steps are analysed when taken (its interpolant is gone after the next step).
- * RK45's steps are kept (their dense output, the states and f at their ends: rk45_save_step)
- * with the discrete state they ran with, and analysed only when the peaks are needed: when an
- * output is read (fmu_update_outputs), an FMU state is taken or a value set (cs_peaks_flush), or
- * PEAK_LOG_MAX steps or PEAK_SNAPSHOTS events have piled up. A master that reads no output of a
- * communication step does not pay for its peaks. The result does not depend on when (or
- * whether) the analysis runs: the values and slopes at a step's ends are functions of the state
- * and f there (the slope a forward difference along f, which the adjacent steps share exactly),
- * computed by the step that ends there and taken over by the next (the step kept before the
- * first one still needed is kept for that).
- *
- * A maximum inside a step is searched only if it can matter: the tangents at the bracket's ends
- * bound it (for a function concave between them, as any is near its maximum) by the height of
- * their intersection, and the search stops once that bound is within PEAK_RTOL x the integration
- * tolerance of the largest value found. Each iteration takes the maximum of the cubic Hermite
- * polynomial through the bracket's values and slopes (4th order: one or two iterations), so a
- * wiggle of the resting contact's force costs nothing and an impact's peak a few evaluations. */
+/* the model's analysis of the steps (fmu_model.analyse_step; csfh: the peak outputs): the steps
+ * of an integrator that can save them are kept (kept_steps.h) and handed over when the model's
+ * outputs are needed; the others are handed over live, at every pass of cs_do_step's loop */
 
-#define PEAK_ITERATIONS 40 /* at most (a few are used) */
-#define PEAK_RTOL 1.0      /* x the integration tolerance: the accuracy of a located maximum */
-
-/* Where a step's states come from: the live integrator (CVODE, record NULL) or a kept RK45
- * step. */
+/* The live step as the model sees it (fmu_step_t first: its calls come back with it). */
 typedef struct {
-    const double *record;
-    double t0, tn, h;
-} peak_source_t;
+    fmu_step_t step;
+    fmu_instance_t *inst;
+    double from; /* where the communication step had got to before it */
+} live_view_t;
 
-/* The state (k = 0) or its derivative at t in the step of `src`: 0, < 0 outside. */
-static int peak_dense(const cs_integration_t *cs, const peak_source_t *src, double t, int k,
-                      double *out)
+static int live_dense(const fmu_step_t *step, double t, int k, double *out)
 {
-    if (src->record != NULL) {
-        cs->log_ops->record_dense(src->record, NX, t, k, out);
-        return 0;
-    }
-    return solver_dense(cs, t, k, out);
+    const live_view_t *v = (const live_view_t *)(const void *)step;
+    return solver_dense(v->inst->integration, t, k, out);
 }
 
-/* The peak quantities v at time t of the step, and their time derivatives in slope (a forward
- * difference along the derivative of the state); 0 when the model has nothing to track there.
- * y_at_t, f_at_t: the state and its derivative at t if known (else NULL: interpolated). */
-static int peak_point(fmu_instance_t *inst, const peak_source_t *src, double t,
-                      const double *y_at_t, const double *f_at_t, double *v, double *slope)
+static int live_keep(const fmu_step_t *step)
 {
-    cs_integration_t *cs = inst->integration;
-    t = t < src->t0 ? src->t0 : (t > src->tn ? src->tn : t); /* round-off at the step's ends */
-    double *py = cs->peak_y, *pd = cs->peak_dy;
-    if (y_at_t != NULL) {
-        memcpy(py, y_at_t, NX * sizeof(double));
-    } else if (peak_dense(cs, src, t, 0, py) < 0) {
-        return 0;
-    }
-    if (!fmu_model.peak_values(inst->model, py, v)) {
-        return 0;
-    }
-    if (f_at_t != NULL) {
-        memcpy(pd, f_at_t, NX * sizeof(double));
-    } else if (peak_dense(cs, src, t, 1, pd) < 0) {
-        return 0;
-    }
-    const double eps = 1e-7 * (fabs(src->h) > 0.0 ? fabs(src->h) : 1e-9);
-    for (int i = 0; i < NX; i++) {
-        pd[i] = py[i] + eps * pd[i];
-    }
-    double ve[FMU_MAX_PEAKS];
-    fmu_model.peak_values(inst->model, pd, ve);
-    for (int j = 0; j < fmu_model.n_peaks; j++) {
-        slope[j] = (ve[j] - v[j]) / eps;
-    }
-    return 1;
+    const live_view_t *v = (const live_view_t *)(const void *)step;
+    cs_integration_t *cs = v->inst->integration;
+    return kept_keep(&cs->kept, v->inst->model, cs->current->ops, cs->current->self,
+                     cs->comm_start, v->from, v->inst->tolerance);
 }
 
-/* Forget what is known of CVODE's last step (restarted: a new interpolant). */
-static void peaks_forget(cs_integration_t *cs)
+/* Forget the live step (the integrator restarted: a new dense output). */
+static void forget_live(cs_integration_t *cs)
 {
-    cs->peak_slope_valid = 0;
-    cs->peak_n_max = 0;
-}
-
-/* Upper bound of a maximum between (a, va, sa) and (b, vb, sb) with sa > 0 >= sb: the height of
- * the intersection of the two tangents, over the larger end value (0 if below). */
-static double peak_gain_bound(double a, double va, double sa, double b, double vb, double sb)
-{
-    double tx = (vb - va + sa * a - sb * b) / (sa - sb);
-    tx = tx < a ? a : (tx > b ? b : tx);
-    const double gain = va + sa * (tx - a) - (va > vb ? va : vb);
-    return gain > 0.0 ? gain : 0.0;
-}
-
-/* The maximum in (0, 1) of the cubic Hermite polynomial with slopes d0 > 0 at 0 and d1 <= 0 at
- * 1 (slopes times the interval's length) and rise dv from 0 to 1; NaN if it has none there. */
-static double hermite_max(double dv, double d0, double d1)
-{
-    /* p'(u) = d0 + B u + A u^2 */
-    const double A = 3.0 * (d0 + d1 - 2.0 * dv), B = 2.0 * (3.0 * dv - 2.0 * d0 - d1);
-    const double C = d0;
-    double roots[2] = {NAN, NAN};
-    if (fabs(A) <= 1e-12 * (fabs(B) + fabs(C))) {
-        roots[0] = B != 0.0 ? -C / B : NAN;
-    } else {
-        const double disc = B * B - 4.0 * A * C;
-        if (disc < 0.0) {
-            return NAN;
-        }
-        const double q = -0.5 * (B + (B >= 0.0 ? sqrt(disc) : -sqrt(disc)));
-        roots[0] = q / A;
-        roots[1] = q != 0.0 ? C / q : NAN;
+    if (cs->live_memory != NULL) {
+        memset(cs->live_memory, 0, fmu_model.step_memory);
     }
-    for (int i = 0; i < 2; i++) {
-        const double u = roots[i];
-        if (u > 0.0 && u < 1.0 && 2.0 * A * u + B <= 0.0) { /* p'' <= 0: a maximum */
-            return u;
-        }
-    }
-    return NAN;
-}
-
-/* The maxima inside a step with values and slopes v0, s0 at its start and v1, s1 at its end:
- * their times and the quantities there; returns how many. */
-static int peak_maxima(fmu_instance_t *inst, const peak_source_t *src, const double *v0,
-                       const double *s0, const double *v1, const double *s1, double *max_t,
-                       double (*max_v)[FMU_MAX_PEAKS])
-{
-    int n_max = 0;
-    for (int j = 0; j < fmu_model.n_peaks; j++) {
-        if (!(s0[j] > 0.0 && s1[j] <= 0.0)) {
-            continue;
-        }
-        double lo = src->t0, hi = src->tn, v_lo = v0[j], v_hi = v1[j], s_lo = s0[j], s_hi = s1[j];
-        double best_t = NAN, best_v = -INFINITY, best[FMU_MAX_PEAKS];
-        for (int k = 0; k < PEAK_ITERATIONS && hi - lo > 1e-7 * src->h; k++) {
-            const double tol = PEAK_RTOL * inst->tolerance * fmax(fabs(v_lo), fabs(v_hi));
-            if (peak_gain_bound(lo, v_lo, s_lo, hi, v_hi, s_hi) <= tol) {
-                break;
-            }
-            const double L = hi - lo;
-            double u = hermite_max(v_hi - v_lo, L * s_lo, L * s_hi);
-            if (!(u > 0.0 && u < 1.0)) {
-                u = s_lo / (s_lo - s_hi); /* secant on the slope */
-            }
-            u = u < 0.01 ? 0.01 : (u > 0.99 ? 0.99 : u); /* the bracket must shrink */
-            const double mid = lo + u * L;
-            double v[FMU_MAX_PEAKS], s[FMU_MAX_PEAKS];
-            if (!peak_point(inst, src, mid, NULL, NULL, v, s)) {
-                break;
-            }
-            if (v[j] > best_v) {
-                best_v = v[j], best_t = mid;
-                memcpy(best, v, sizeof(best));
-            }
-            if (s[j] > 0.0) {
-                lo = mid, v_lo = v[j], s_lo = s[j];
-            } else {
-                hi = mid, v_hi = v[j], s_hi = s[j];
-            }
-        }
-        if (best_v > v0[j] && best_v > v1[j]) { /* inside the step, above its ends */
-            max_t[n_max] = best_t;
-            memcpy(max_v[n_max], best, sizeof(best));
-            n_max++;
-        }
-    }
-    return n_max;
-}
-
-/* Analyse CVODE's new step [tn - hu, tn] (y_end: the state at tn, or NULL): its maxima and its
- * end. */
-static void peak_step(fmu_instance_t *inst, const double *y_end)
-{
-    cs_integration_t *cs = inst->integration;
-    double v1[FMU_MAX_PEAKS], s1[FMU_MAX_PEAKS], s0[FMU_MAX_PEAKS], v0[FMU_MAX_PEAKS];
-    const double tn = solver_time(cs), hu = cs->current->ops->last_step(cs->current->self);
-    const peak_source_t src = {NULL, tn - hu, tn, hu};
-    const int have_start = cs->peak_slope_valid && cs->peak_t == src.t0;
-    cs->peak_n_max = 0;
-    if (have_start) {
-        memcpy(s0, cs->peak_slope, sizeof(s0));
-        memcpy(v0, cs->peak_end_v, sizeof(v0));
-    }
-    if (!peak_point(inst, &src, tn, y_end, NULL, v1, s1)) {
-        cs->peak_slope_valid = 0;
-        return;
-    }
-    if (have_start || peak_point(inst, &src, src.t0, NULL, NULL, v0, s0)) {
-        cs->peak_n_max = peak_maxima(inst, &src, v0, s0, v1, s1, cs->peak_max_t, cs->peak_max_v);
-    }
-    memcpy(cs->peak_slope, s1, sizeof(s1));
-    memcpy(cs->peak_end_v, v1, sizeof(v1));
-    cs->peak_t = tn;
-    cs->peak_slope_valid = 1;
-}
-
-/* --- RK45's steps, kept and analysed when needed ------------------------------------------ */
-
-/* The discrete states kept for the peaks: peaks_state_size bytes each, at the strictest
- * alignment. */
-static size_t snapshot_stride(void)
-{
-    const size_t align = _Alignof(max_align_t);
-    return (fmu_model.peaks_state_size + align - 1) / align * align;
-}
-
-static unsigned char *snapshot(cs_integration_t *cs, int k)
-{
-    return cs->snap + (size_t)k * snapshot_stride();
-}
-
-static double *log_record(cs_integration_t *cs, int k)
-{
-    return cs->log_data + (size_t)k * cs->log_stride;
-}
-
-/* Forget the kept steps (a restart from outside: the next ones start afresh). */
-static void peak_log_clear(cs_integration_t *cs)
-{
-    cs->log_n = 0;
-    cs->snap_n = 0;
-    cs->snap_stale = 1;
-}
-
-/* Put the model into the discrete state kept step k ran with (set), or back into its own. Only
- * that discrete state is saved (peaks_state_save into the scratch), not the whole model: a copy
- * of the whole model (1.2 kB) for every analysed step was a tenth of the peaks' cost. */
-static void with_step_state(fmu_instance_t *inst, int k, int set)
-{
-    cs_integration_t *cs = inst->integration;
-    if (set) {
-        fmu_model.peaks_state_save(inst->model, cs->scratch);
-        fmu_model.peaks_state_restore(inst->model, snapshot(cs, cs->log[k].snapshot));
-    } else {
-        fmu_model.peaks_state_restore(inst->model, cs->scratch);
-    }
-}
-
-/* The values and slopes at the end (end = 1) or start (0) of kept step k (the model in its
- * discrete state). */
-static void log_point(fmu_instance_t *inst, int k, int end)
-{
-    cs_integration_t *cs = inst->integration;
-    peak_record_t *r = &cs->log[k];
-    const double *rec = log_record(cs, k);
-    const peak_source_t src = {rec, r->t0, r->tn, r->tn - r->t0};
-    cs_record_view_t view;
-    cs->log_ops->record_view(rec, NX, &view);
-    if (end) {
-        r->end_valid = peak_point(inst, &src, r->tn, view.y1, view.f1, r->v1, r->s1);
-        r->end_done = 1;
-    } else {
-        r->start_valid = peak_point(inst, &src, r->t0, view.y0, view.f0, r->v0, r->s0);
-        r->start_done = 1;
-    }
-}
-
-/* Analyse kept step k: its ends (the start is the previous step's end when that one is kept,
- * ends where this one starts and ran in the same discrete state) and its maxima. */
-static void log_analyse(fmu_instance_t *inst, int k)
-{
-    cs_integration_t *cs = inst->integration;
-    peak_record_t *r = &cs->log[k];
-    if (r->analysed) {
-        return;
-    }
-    peak_record_t *p = k > 0 ? &cs->log[k - 1] : NULL;
-    const int chained =
-        p != NULL && p->tn == r->t0 && p->t_cut == p->tn && p->snapshot == r->snapshot;
-    with_step_state(inst, k, 1);
-    if (chained) {
-        if (!p->end_done) {
-            log_point(inst, k - 1, 1); /* (the same discrete state) */
-        }
-        r->start_valid = p->end_valid;
-        memcpy(r->v0, p->v1, sizeof(r->v0));
-        memcpy(r->s0, p->s1, sizeof(r->s0));
-        r->start_done = 1;
-    } else {
-        log_point(inst, k, 0);
-    }
-    log_point(inst, k, 1);
-    r->n_max = 0;
-    if (r->start_valid && r->end_valid) {
-        const peak_source_t src = {log_record(cs, k), r->t0, r->tn, r->tn - r->t0};
-        r->n_max = peak_maxima(inst, &src, r->v0, r->s0, r->v1, r->s1, r->max_t, r->max_v);
-    }
-    with_step_state(inst, k, 0);
-    r->analysed = 1;
-}
-
-/* Add the peaks of the kept steps that lie in the communication step so far, (comm_start, t]. */
-static void peak_log_add(fmu_instance_t *inst, double t)
-{
-    cs_integration_t *cs = inst->integration;
-    for (int k = 0; k < cs->log_n; k++) {
-        peak_record_t *r = &cs->log[k];
-        if (!(r->t_cut > cs->comm_start && r->t0 < t)) {
-            continue; /* outside (kept for its end values only, or not yet reached) */
-        }
-        log_analyse(inst, k);
-        for (int m = 0; m < r->n_max; m++) {
-            if (r->max_t[m] > cs->comm_start && r->max_t[m] <= t && r->max_t[m] <= r->t_cut) {
-                fmu_model.peaks_add(inst->model, r->max_v[m]);
-            }
-        }
-        if (r->end_valid && r->t_cut == r->tn && r->tn <= t) {
-            fmu_model.peaks_add(inst->model, r->v1);
-        }
-    }
-}
-
-/* Keep only the kept steps from `first` on, and the discrete states they refer to. */
-static void peak_log_keep_from(cs_integration_t *cs, int first)
-{
-    if (first > 0) {
-        memmove(cs->log, cs->log + first, (size_t)(cs->log_n - first) * sizeof(peak_record_t));
-        memmove(cs->log_data, log_record(cs, first),
-                (size_t)(cs->log_n - first) * cs->log_stride * sizeof(double));
-        cs->log_n -= first;
-    }
-    if (cs->log_n == 0) {
-        cs->snap_n = 0;
-        cs->snap_stale = 1;
-        return;
-    }
-    const int used = cs->log[0].snapshot; /* the snapshots are in the steps' order */
-    if (used > 0) {
-        memmove(cs->snap, snapshot(cs, used), (size_t)(cs->snap_n - used) * snapshot_stride());
-        cs->snap_n -= used;
-        for (int k = 0; k < cs->log_n; k++) {
-            cs->log[k].snapshot -= used;
-        }
-    }
-}
-
-/* Drop the kept steps that count only up to t, except the last of them (its end values may
- * start the next step). */
-static void peak_log_drop(cs_integration_t *cs, double t)
-{
-    int first = 0;
-    while (first < cs->log_n && cs->log[first].t_cut <= t) {
-        first++;
-    }
-    peak_log_keep_from(cs, first > 0 ? first - 1 : 0);
-}
-
-/* The room for the kept steps, at its full size in one block (nothing is zeroed: a restart
- * from outside frees nothing): the scratch copy of the model's discrete state and the
- * snapshots of it (snapshot_stride() apart), the records, their RK45 data. Grown in steps
- * instead, each growth copied the kept records (the larger part of the memory that a short run
- * touched for the first time). */
-static int peak_room_alloc(cs_integration_t *cs, const cs_integrator_ops_t *ops)
-{
-    const size_t states = (1 + (size_t)PEAK_SNAPSHOTS) * snapshot_stride();
-    const size_t log = (size_t)PEAK_LOG_MAX * sizeof(peak_record_t);
-    const size_t stride = ops->record_size(NX);
-    const size_t data = (size_t)PEAK_LOG_MAX * stride * sizeof(double);
-    unsigned char *room = (unsigned char *)malloc(states + log + data);
-    if (room == NULL) {
-        return 0;
-    }
-    cs->peak_room = room;
-    cs->scratch = room;
-    cs->snap = room + snapshot_stride();
-    cs->log = (peak_record_t *)(void *)(room + states);
-    cs->log_data = (double *)(void *)(room + states + log);
-    cs->log_stride = stride;
-    cs->log_ops = ops;
-    return 1;
-}
-
-/* Keep RK45's new step for the peaks (t_now: where the communication step has got to before
- * it); 0 if it cannot be kept (out of memory, or a model without peaks_state_save: the step is
- * then analysed now, as CVODE's). */
-static int peak_log_keep(fmu_instance_t *inst, double t_now)
-{
-    cs_integration_t *cs = inst->integration;
-    if (fmu_model.peaks_state_save == NULL) {
-        return 0;
-    }
-    const cs_integrator_ops_t *ops = cs->current->ops;
-    if (cs->peak_room == NULL && !peak_room_alloc(cs, ops)) {
-        return 0;
-    }
-    if (ops != cs->log_ops) {
-        return 0; /* (one integrator saves its steps: RK45) */
-    }
-    if (cs->log_n == PEAK_LOG_MAX || (cs->snap_stale && cs->snap_n == PEAK_SNAPSHOTS)) {
-        /* piled up in this communication step: analyse them now, keep the last (its end
-         * values start the new step) */
-        peak_log_add(inst, t_now);
-        peak_log_keep_from(cs, cs->log_n - 1);
-    }
-    if (cs->snap_stale || cs->snap_n == 0) {
-        fmu_model.peaks_state_save(inst->model, snapshot(cs, cs->snap_n));
-        cs->snap_n++;
-        cs->snap_stale = 0;
-    }
-    const int k = cs->log_n;
-    double *rec = log_record(cs, k);
-    if (ops->save_step(cs->current->self, rec) != 0) {
-        return 0;
-    }
-    cs_record_view_t view;
-    ops->record_view(rec, NX, &view);
-    peak_record_t *r = &cs->log[k];
-    r->t0 = view.t0;
-    r->tn = view.tn;
-    r->t_cut = r->tn;
-    r->snapshot = cs->snap_n - 1;
-    r->start_done = r->end_done = r->analysed = 0;
-    r->start_valid = r->end_valid = 0;
-    r->n_max = 0;
-    cs->log_n++;
-    return 1;
-}
-
-/* An event at t (local time) changes the discrete state: the kept step holding it stops counting
- * there. */
-static void peak_log_event(cs_integration_t *cs, double t)
-{
-    if (cs->log_n > 0) {
-        peak_record_t *r = &cs->log[cs->log_n - 1];
-        if (t > r->t0 && t < r->t_cut) {
-            r->t_cut = t;
-        }
-    }
-    cs->snap_stale = 1;
-}
-
-void cs_peaks_flush(fmu_instance_t *inst)
-{
-    cs_integration_t *cs = inst->integration;
-    if (cs == NULL || cs->log_n == 0 || NX == 0) {
-        return;
-    }
-    const double now = *fmu_time(inst) - cs->origin;
-    peak_log_add(inst, now);
-    /* what ends by now is done for this communication step, but the next one may need the
-     * last of them */
-    peak_log_drop(cs, now);
 }
 
 /* The part [ta, tb] of the communication step, the state at tb in cs->y; `stepped`: the
  * integrator took a new step to get there (tb is its end unless a root or the communication
  * point came first). */
-static void track_peaks(fmu_instance_t *inst, double ta, double tb, int stepped)
+static void analyse_live(fmu_instance_t *inst, double ta, double tb, int stepped)
 {
     cs_integration_t *cs = inst->integration;
-    if (fmu_model.n_peaks <= 0) {
+    if (fmu_model.analyse_step == NULL) {
         return;
     }
-    if (fmu_model.peaks_tracked != NULL && !fmu_model.peaks_tracked(inst->model)) {
-        peaks_forget(cs); /* nothing to track in this discrete state (out of contact) */
+    const integrator_t *it = cs->current;
+    const double tn = it->ops->time(it->self), hu = it->ops->last_step(it->self);
+    const fmu_step_t step = {1, stepped, tn - hu, tn, hu, tn, inst->tolerance, live_dense,
+                             NULL, NULL, tb == tn ? cs->y : NULL, NULL, NULL, cs->live_memory,
+                             NULL, it->ops->save_step != NULL ? live_keep : NULL};
+    const live_view_t v = {step, inst, ta};
+    fmu_model.analyse_step(inst->model, &v.step, ta, tb);
+}
+
+void cs_flush(fmu_instance_t *inst)
+{
+    cs_integration_t *cs = inst->integration;
+    if (cs == NULL || cs->kept.n == 0 || NX == 0) {
         return;
     }
-    if (cs->current->ops->save_step != NULL) {
-        if (!stepped || peak_log_keep(inst, ta)) {
-            return; /* analysed when needed */
-        }
-    }
-    if (stepped) {
-        /* the previous CVODE step may reach into this part (it ended beyond the last
-         * communication point): take its maxima and its end there before the new step's
-         * analysis replaces them */
-        for (int m = 0; m < cs->peak_n_max; m++) {
-            if (cs->peak_max_t[m] > ta && cs->peak_max_t[m] <= tb) {
-                fmu_model.peaks_add(inst->model, cs->peak_max_v[m]);
-            }
-        }
-        if (cs->peak_slope_valid && cs->peak_t > ta && cs->peak_t <= tb) {
-            fmu_model.peaks_add(inst->model, cs->peak_end_v);
-        }
-        const double tn = solver_time(cs);
-        peak_step(inst, tb == tn ? cs->y : NULL);
-        if (cs->peak_slope_valid && tb == cs->peak_t) {
-            fmu_model.peaks_add(inst->model, cs->peak_end_v);
-        }
-    }
-    for (int m = 0; m < cs->peak_n_max; m++) {
-        if (cs->peak_max_t[m] > ta && cs->peak_max_t[m] <= tb) {
-            fmu_model.peaks_add(inst->model, cs->peak_max_v[m]);
-        }
-    }
+    const double now = *fmu_time(inst) - cs->origin;
+    kept_analyse(&cs->kept, inst->model, cs->comm_start, now, inst->tolerance);
+    /* what ends by now is done for this communication step, but the next one may need the
+     * last of them */
+    kept_drop(&cs->kept, now);
 }
 
 /* Take the integrator's solution (local time tret, cs->y) as the model's time and state. */
@@ -1085,8 +628,8 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs, int stop_at_even
             return FMU_ERROR;
         }
         inst->restart_integration = 0;
-        peaks_forget(inst->integration); /* a new interpolant */
-        peak_log_clear(inst->integration);
+        forget_live(inst->integration); /* a new dense output */
+        kept_clear(&inst->integration->kept);
     }
     cs_integration_t *cs = inst->integration;
     const long warnings = cs->warnings;
@@ -1096,11 +639,11 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs, int stop_at_even
     const int automatic = cs->method->stiff != NULL;
     long events = 0, steps = 0;
     double tret = now;
-    if (fmu_model.n_peaks > 0) { /* the step's peaks start with the values at its start */
-        fmu_model.peaks_begin(inst->model, inst->outputs_valid);
+    if (fmu_model.comm_step_begins != NULL) {
+        fmu_model.comm_step_begins(inst->model, inst->outputs_valid);
     }
     cs->comm_start = now;
-    peak_log_drop(cs, now); /* RK45's steps that ended before: their peaks were not read */
+    kept_drop(&cs->kept, now); /* the kept steps that ended before: their outputs were not read */
     while (tret < t_end) {
         /* One internal step per call: the solution is taken at every step, and auto can check
          * the stiffness without waiting for the end of the communication step. No stop time:
@@ -1177,7 +720,7 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs, int stop_at_even
             inst->restart_integration = 1;
             return FMU_ERROR;
         }
-        track_peaks(inst, tret_before, tret, stepped);
+        analyse_live(inst, tret_before, tret, stepped);
         take_solution(inst, tret);
         if (flag == STEP_OK && tret >= t_end) {
             break;
@@ -1205,12 +748,12 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs, int stop_at_even
             kind = fmu_event_update(inst);
             restart = kind != 0;
             if (restart) {
-                peaks_forget(cs); /* what follows the event has a new interpolant */
-                peak_log_event(cs, tret);
+                forget_live(cs); /* what follows the event has a new dense output */
+                kept_event(&cs->kept, tret);
             }
         } else if (flag == STEP_TSTOP) {
             restart = 1; /* a time event: the right-hand side's kink (see set_time_event_stop) */
-            peaks_forget(cs);
+            forget_live(cs);
         }
         fmu_status_t s = FMU_OK;
         if (restart) {
@@ -1234,7 +777,7 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs, int stop_at_even
             s = solver_start(cs, method, tret, 0.0);
             cs->hint_code = 0;
             start_window(cs, tret);
-            peaks_forget(cs);
+            forget_live(cs);
         } else {
             continue;
         }
@@ -1259,4 +802,4 @@ fmu_status_t cs_reset(fmu_instance_t *inst)
     return FMU_OK;
 }
 
-const fmu_stepper_t cs_stepper = {cs_free, cs_peaks_flush};
+const fmu_stepper_t cs_stepper = {cs_free, cs_flush};

@@ -20,10 +20,10 @@ void cs_free(fmu_instance_t *inst);
  * holds (*stopped = 0; stopped may be NULL). */
 fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end, int stop_at_event, int *stopped);
 fmu_status_t cs_reset(fmu_instance_t *inst);
-/* Bring the peak outputs of the communication step up to date (the co-simulation stepper
- * analyses RK45's steps for them only when needed): before the outputs are computed, an FMU
- * state is taken or values are set. Nothing without co-simulation. */
-void cs_peaks_flush(fmu_instance_t *inst);
+/* Hand the kept steps of the communication step to the model (fmu_model.analyse_step: the
+ * steps of RK45 are analysed only when needed): before the outputs are computed, an FMU state is
+ * taken or values are set. Nothing without co-simulation. */
+void cs_flush(fmu_instance_t *inst);
 
 CSFH_INTERNAL_END
 

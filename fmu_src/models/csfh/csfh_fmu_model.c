@@ -4,6 +4,7 @@
 #include <stdio.h>
 
 #include "csfh_model.h"
+#include "csfh_peaks.h"
 #include "csfh_variables.h"
 #include "fmu_model.h"
 
@@ -120,51 +121,6 @@ static void add_integrator_steps(void *mv, long steps)
     m->counters.steps += (int)(steps < room ? steps : room);
 }
 
-static void peaks_begin(void *mv, int outputs_current)
-{
-    csfh_model_t *m = (csfh_model_t *)mv;
-    m->peaks.active = 1;
-    if (outputs_current) {
-        m->peaks.v[0] = m->out.F_N;
-        m->peaks.v[1] = fabs(m->out.F_T);
-        m->peaks.v[2] = m->out.indentation;
-        m->peaks.v[3] = m->p.track_stress_peak ? m->out.stress_max : 0.0;
-    } else {
-        csfh_model_peak_values(m, m->x, m->peaks.v);
-    }
-}
-
-static int peak_values(void *m, const double *x, double *v)
-{
-    return csfh_model_peak_values((csfh_model_t *)m, x, v);
-}
-
-static void peaks_add(void *mv, const double *v)
-{
-    csfh_model_t *m = (csfh_model_t *)mv;
-    for (int j = 0; j < CSFH_N_PEAKS; j++) {
-        m->peaks.v[j] = v[j] > m->peaks.v[j] ? v[j] : m->peaks.v[j];
-    }
-}
-
-_Static_assert(CSFH_N_PEAKS <= FMU_MAX_PEAKS,
-               "the co-simulation stepper tracks at most FMU_MAX_PEAKS peak outputs");
-
-static void peaks_state_save(const void *m, void *state)
-{
-    *(csfh_discrete_t *)state = ((const csfh_model_t *)m)->z;
-}
-
-static void peaks_state_restore(void *m, const void *state)
-{
-    ((csfh_model_t *)m)->z = *(const csfh_discrete_t *)state;
-}
-
-static int peaks_tracked(const void *m)
-{
-    return csfh_model_peaks_tracked((const csfh_model_t *)m);
-}
-
 /* Restored FMU state: the fields that are not stored table variables (checked by the glue:
  * time, states, inputs, parameters, contact.active/onset_speed/onset_time/release_*) and not
  * recomputed (d, out, der). */
@@ -230,13 +186,8 @@ const fmu_model_t fmu_model = {
     .outputs = outputs,
     .add_integrator_steps = add_integrator_steps,
     .cs_method = cs_method,
-    .n_peaks = CSFH_N_PEAKS,
-    .peaks_begin = peaks_begin,
-    .peak_values = peak_values,
-    .peaks_add = peaks_add,
-    .peaks_state_size = sizeof(csfh_discrete_t),
-    .peaks_state_save = peaks_state_save,
-    .peaks_state_restore = peaks_state_restore,
-    .peaks_tracked = peaks_tracked,
+    .step_memory = sizeof(csfh_step_peaks_t),
+    .comm_step_begins = csfh_peaks_begin,
+    .analyse_step = csfh_peaks_analyse_step,
     .check_state = check_state,
 };
