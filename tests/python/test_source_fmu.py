@@ -30,6 +30,7 @@ CSFH_SOURCES = {
     "integrator_rk45.c",
     "integrator_cvode.c",
     "kept_steps.c",
+    "auto_policy.c",
     "rk45.c",
     "csfh_fmu_model.c",
     "csfh_peaks.c",

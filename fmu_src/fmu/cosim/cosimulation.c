@@ -16,13 +16,8 @@
  *   RK45   explicit Runge-Kutta 5(4) of Dormand and Prince: 6 right-hand sides per step and
  *          almost no bookkeeping, dense output and root finding on it; the cheapest choice while
  *          the motion is not stiff (flight, impacts resolved in time);
- *   auto   RK45; where it struggles (in a window of AUTO_WINDOW steps more than
- *          AUTO_SUSPECT_FAILED of the steps fail, or more than AUTO_SUSPECT_STIFF of them sit at
- *          its stability limit), BDF is tried for two windows (start-up, then measured) and kept
- *          if its mean step is more than AUTO_BDF_COST times RK45's (a BDF step costs about that
- *          much more), i.e. where the motion is stiff (resting or rolling contact); otherwise
- *          back to RK45, with the next trial after 1, 2, 4, ... windows. Every event restarts
- *          with RK45. The decision (auto_decide) is a pure function of the window's counts.
+ *   auto   RK45, and BDF where the motion is stiff (auto_policy.h); every event restarts with
+ *          RK45.
  *
  * Inputs are held constant over the communication step (zero-order hold); a changed input value,
  * a changed state or tunable parameter, and fmi2Get/SetFMUstate restart the integrator at the
@@ -66,6 +61,7 @@
 
 #include "cosimulation.h"
 #include "fmu_instance.h"
+#include "auto_policy.h"
 #include "integrator.h"
 #include "kept_steps.h"
 
@@ -74,14 +70,6 @@
 #ifndef MAX_STEPS_PER_CALL
 #define MAX_STEPS_PER_CALL 500000L    /* integrator steps per fmi2DoStep (the fuzz build lowers it) */
 #endif
-#define AUTO_WINDOW 100L              /* auto: steps per decision */
-#define AUTO_SUSPECT_FAILED 0.05      /* auto: failed fraction of a window that triggers a trial */
-#define AUTO_SUSPECT_STIFF 0.5        /* auto: fraction of RK45's steps at its stability limit
-                                         that triggers a trial */
-#define AUTO_BDF_COST 2.0             /* auto: cost of a BDF step over an RK45 step (measured:
-                                         1.9 in resting contact, C master, 4 s of the
-                                         central drop with c_r = 0.9 at rtol 1e-6) */
-#define AUTO_MAX_HOLDOFF 64           /* auto: most windows between two trials */
 #define FIRST_STEP_HORIZON 1.0        /* s: bound of the first step after a (re)start (see cs_do_step) */
 #define FMU_EVENT_KINDS 8             /* the first-step memory: event_update codes 1..7 */
 
@@ -138,15 +126,7 @@ struct cs_integration {
                          step that contains it (0: none) */
     const cs_integrator_ops_t *switch_to; /* STEP_SWITCH pending: the integrator auto chose at t_root */
     long counted_steps; /* steps since the last (re)start already added to the model's counter */
-    /* auto (auto_decide) */
-    long window_steps;      /* the integrator's step, failure and stiff-step counts since its */
-    long window_fails;      /* (re)start, and the time, at the start of the current window */
-    long window_stiff;
-    double window_t0;
-    int trial;              /* 0, or BDF on trial: 1 starting up, 2 measured */
-    int holdoff;            /* non-stiff windows left before the next trial */
-    int next_holdoff;
-    double nonstiff_h;      /* mean step of the non-stiff method in the window before the trial */
+    cs_auto_t automatic;    /* auto's policy (auto_policy.h) */
     /* the model's analysis of the steps (analyse_live, kept_steps.h) */
     double comm_start;        /* the communication step being taken: (comm_start, FMU time] */
     void *live_memory;        /* the model's memory of the live steps (step_memory bytes) */
@@ -241,15 +221,6 @@ static int solver_dense(const cs_integration_t *cs, double t, int k, double *out
     return cs->current->ops->dense(cs->current->self, t, k, out);
 }
 
-static void solver_counts(const cs_integration_t *cs, long *steps, long *fails, long *stiff)
-{
-    cs_counts_t c;
-    cs->current->ops->counts(cs->current->self, &c);
-    *steps = c.steps;
-    *fails = c.fails;
-    *stiff = c.stiff;
-}
-
 /* The integrator `ops` of the run, made when it first runs: NULL if it cannot be (reported). */
 static integrator_t *integrator_of(cs_integration_t *cs, const cs_integrator_ops_t *ops)
 {
@@ -297,118 +268,43 @@ static fmu_status_t solver_set_stop_time(cs_integration_t *cs, double tau_stop)
 }
 
 /* ------------------------------------------------------------------------------------------ */
-/* auto */
+/* auto (auto_policy.h) over the integrators of the method */
 
 /* A new window of steps (the integrator's counters restart with every (re)start). */
 static void start_window(cs_integration_t *cs, double t)
 {
-    solver_counts(cs, &cs->window_steps, &cs->window_fails, &cs->window_stiff);
-    cs->window_t0 = t;
+    cs_counts_t c;
+    cs->current->ops->counts(cs->current->self, &c);
+    cs_auto_window(&cs->automatic, &c, t);
 }
 
 /* A new segment of smooth motion (start, event, restart): no trial, no hold-off. */
 static void start_segment(cs_integration_t *cs, double t)
 {
-    start_window(cs, t);
-    cs->trial = 0;
-    cs->holdoff = 0;
-    cs->next_holdoff = 1;
+    cs_counts_t c;
+    cs->current->ops->counts(cs->current->self, &c);
+    cs_auto_segment(&cs->automatic, &c, t);
 }
 
-/* What auto knows of a finished window, and what it decides. */
-typedef struct {
-    const char *name;  /* the integrator that ran the window, */
-    int stiff_method;  /* 1 if it is the one for stiff motion (BDF) */
-    long steps;        /* its steps (>= AUTO_WINDOW), */
-    double failed;     /* the fraction of them that failed, */
-    double stiff;      /* the fraction at the stability limit (RK45), */
-    double mean_h;     /* and their mean size, s */
-} auto_window_t;
-
-typedef struct {
-    int trial, holdoff, next_holdoff; /* (as in cs_integration_t) */
-    double nonstiff_h;
-} auto_state_t;
-
-/* auto's choice for the next window */
-enum { AUTO_KEEP, AUTO_STIFF, AUTO_NONSTIFF };
-
-/* The integrator for the next window, from the one just finished (pure: no integrator, no FMI):
- * AUTO_KEEP the one that ran it, AUTO_STIFF (BDF) or AUTO_NONSTIFF (`nonstiff`, the integrator
- * auto uses while not stiff). Writes the decision, if any, to `why` (empty when nothing
- * changes). */
-static int auto_decide(auto_state_t *a, const auto_window_t *w, const char *nonstiff, char *why,
-                       size_t why_size)
-{
-    why[0] = '\0';
-    if (!w->stiff_method) {
-        if (a->holdoff > 0) {
-            a->holdoff--;
-        } else if (w->failed > AUTO_SUSPECT_FAILED || w->stiff > AUTO_SUSPECT_STIFF) {
-            a->nonstiff_h = w->mean_h;
-            a->trial = 1;
-            snprintf(why, why_size,
-                     "auto: trying BDF (%.0f %% of %s's steps failed, %.0f %% at its stability "
-                     "limit, mean step %.3g s)",
-                     100.0 * w->failed, w->name, 100.0 * w->stiff, w->mean_h);
-            return AUTO_STIFF;
-        }
-        return AUTO_KEEP;
-    }
-    if (a->trial == 1) { /* BDF's start-up window: not measured */
-        a->trial = 2;
-        return AUTO_KEEP;
-    }
-    if (a->trial == 2) {
-        a->trial = 0;
-        if (w->mean_h > AUTO_BDF_COST * a->nonstiff_h) {
-            snprintf(why, why_size, "auto: BDF kept (stiff: mean step %.3g s, %s %.3g s)",
-                     w->mean_h, nonstiff, a->nonstiff_h);
-            return AUTO_KEEP;
-        }
-        a->holdoff = a->next_holdoff;
-        a->next_holdoff = a->next_holdoff < AUTO_MAX_HOLDOFF ? 2 * a->next_holdoff : AUTO_MAX_HOLDOFF;
-        snprintf(why, why_size, "auto: back to %s (BDF's mean step %.3g s, %s %.3g s)",
-                 nonstiff, w->mean_h, nonstiff, a->nonstiff_h);
-        return AUTO_NONSTIFF;
-    }
-    return AUTO_KEEP;
-}
-
-/* auto: at the end of each window of AUTO_WINDOW steps (t: the local time), the integrator for
- * the next window; writes what it decided to `why` (empty when nothing changes). */
+/* auto: at the end of each step (t: the local time), the integrator for what follows; writes
+ * what it decided to `why` (empty when nothing changes). */
 static const cs_integrator_ops_t *auto_choose(cs_integration_t *cs, double t, char *why,
                                               size_t why_size)
 {
     why[0] = '\0';
     const cs_integrator_ops_t *running = cs->current->ops;
-    long steps = 0, fails = 0, stiff = 0;
-    solver_counts(cs, &steps, &fails, &stiff);
-    auto_window_t w = {running->name, running == cs->method->stiff, steps - cs->window_steps,
-                       0.0, 0.0, 0.0};
-    if (w.steps < AUTO_WINDOW) {
-        return running;
-    }
-    w.failed = (double)(fails - cs->window_fails) / (double)w.steps;
-    w.stiff = (double)(stiff - cs->window_stiff) / (double)w.steps;
-    w.mean_h = (t - cs->window_t0) / (double)w.steps;
-    cs->window_steps = steps;
-    cs->window_fails = fails;
-    cs->window_stiff = stiff;
-    cs->window_t0 = t;
-    auto_state_t a = {cs->trial, cs->holdoff, cs->next_holdoff, cs->nonstiff_h};
+    cs_counts_t c;
+    running->counts(cs->current->self, &c);
     char text[200];
-    const int choice = auto_decide(&a, &w, cs->method->start->name, text, sizeof(text));
-    cs->trial = a.trial;
-    cs->holdoff = a.holdoff;
-    cs->next_holdoff = a.next_holdoff;
-    cs->nonstiff_h = a.nonstiff_h;
+    const int choice = cs_auto_step_end(&cs->automatic, &c, t, running->name,
+                                        running == cs->method->stiff, cs->method->start->name,
+                                        text, sizeof(text));
     if (text[0] != '\0') {
         snprintf(why, why_size, "t = %.17g: %s", cs->origin + t, text);
     }
-    return choice == AUTO_STIFF      ? cs->method->stiff
-           : choice == AUTO_NONSTIFF ? cs->method->start
-                                     : running;
+    return choice == CS_AUTO_STIFF      ? cs->method->stiff
+           : choice == CS_AUTO_NONSTIFF ? cs->method->start
+                                        : running;
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -485,10 +381,10 @@ static fmu_status_t cs_start(fmu_instance_t *inst)
 static long count_steps(fmu_instance_t *inst)
 {
     cs_integration_t *cs = inst->integration;
-    long nsteps = 0, fails = 0, stiff = 0;
-    solver_counts(cs, &nsteps, &fails, &stiff);
-    const long added = nsteps - cs->counted_steps;
-    cs->counted_steps = nsteps;
+    cs_counts_t c;
+    cs->current->ops->counts(cs->current->self, &c);
+    const long added = c.steps - cs->counted_steps;
+    cs->counted_steps = c.steps;
     if (fmu_model.add_integrator_steps != NULL && added != 0) {
         fmu_model.add_integrator_steps(inst->model, added);
     }
