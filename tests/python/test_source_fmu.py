@@ -27,6 +27,7 @@ CSFH_SOURCES = {
     "fmi2_glue.c",
     "fmu_instance.c",
     "cosimulation.c",
+    "integration.c",
     "integrator_rk45.c",
     "integrator_cvode.c",
     "kept_steps.c",

@@ -141,6 +141,28 @@ static void *adams_create(const cs_problem_t *problem)
     return create(problem, CV_ADAMS);
 }
 
+/* The new memory's problem (t, ny), messages, tolerances, solver and roots: 0, or -1 (reported;
+ * the memory is then freed, never reused half set up). */
+static int configure(cvode_integrator_t *it, double t)
+{
+    void *mem = it->mem;
+    int s = check(it, CVodeSetErrHandlerFn(mem, error_handler, it), "CVodeSetErrHandlerFn");
+    if (s == 0) s = check(it, CVodeInit(mem, rhs, t, it->ny), "CVodeInit");
+    if (s == 0) s = check(it, CVodeSetUserData(mem, it), "CVodeSetUserData");
+    if (s == 0) s = check(it, CVodeSVtolerances(mem, it->problem.rtol, it->nabstol), "CVodeSVtolerances");
+    if (s == 0 && it->lmm == CV_ADAMS) {
+        s = check(it, CVodeSetNonlinearSolver(mem, it->NLS), "CVodeSetNonlinearSolver");
+    } else if (s == 0) {
+        s = check(it, CVodeSetLinearSolver(mem, it->LS, it->J), "CVodeSetLinearSolver");
+    }
+    if (s == 0) s = check(it, CVodeRootInit(mem, it->problem.n_roots, roots), "CVodeRootInit");
+    if (s == 0) s = check(it, CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn");
+    if (s != 0) {
+        CVodeFree(&it->mem);
+    }
+    return s;
+}
+
 /* New CVODE memory at (t, ny), its solvers made once: 0, or -1 (reported). */
 static int new_memory(cvode_integrator_t *it, double t)
 {
@@ -157,22 +179,7 @@ static int new_memory(cvode_integrator_t *it, double t)
         it->problem.error(it->problem.host, "cannot allocate CVODE");
         return -1;
     }
-    void *mem = it->mem;
-    int s = check(it, CVodeSetErrHandlerFn(mem, error_handler, it), "CVodeSetErrHandlerFn");
-    if (s == 0) s = check(it, CVodeInit(mem, rhs, t, it->ny), "CVodeInit");
-    if (s == 0) s = check(it, CVodeSetUserData(mem, it), "CVodeSetUserData");
-    if (s == 0) s = check(it, CVodeSVtolerances(mem, it->problem.rtol, it->nabstol), "CVodeSVtolerances");
-    if (s == 0 && adams) {
-        s = check(it, CVodeSetNonlinearSolver(mem, it->NLS), "CVodeSetNonlinearSolver");
-    } else if (s == 0) {
-        s = check(it, CVodeSetLinearSolver(mem, it->LS, it->J), "CVodeSetLinearSolver");
-    }
-    if (s == 0) s = check(it, CVodeRootInit(mem, it->problem.n_roots, roots), "CVodeRootInit");
-    if (s == 0) s = check(it, CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn");
-    if (s != 0) {
-        CVodeFree(&it->mem); /* half set up: never reused */
-    }
-    return s;
+    return configure(it, t);
 }
 
 static int cvode_integrator_start(void *self, double t, const double *y, double h_first)
