@@ -23,6 +23,7 @@
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 
+#include "csfh_fmu.h"
 #include "csfh_model.h"
 #include "csfh_rk4event.h"
 #include "rk45.h"
@@ -49,7 +50,7 @@ static int cmp(const void *a, const void *b)
 static void setup(csfh_model_t *m, int law)
 {
     char msg[256];
-    csfh_model_set_defaults(m);
+    csfh_fmu_model_defaults(m);
     m->p.law = law;
     m->p.flexure_enabled = 0;
     m->p.friction_enabled = 0;
@@ -227,7 +228,6 @@ static run_t run_rk4(int law)
     run_t out = {{NAN, NAN, NAN}, 0, 0.0};
     csfh_model_t m;
     setup(&m, law);
-    m.contact_by_gap = 1;
     const csfh_rk4_options_t o = {2e-4, 1e-4, 2e-4 * pow(2.0, -40)};
     const double x0[6] = {0.0, 0.01, 0.0, 0.0, 0.0, 0.0};
     csfh_rk4_stats_t st;

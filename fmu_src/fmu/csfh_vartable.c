@@ -5,18 +5,6 @@
 
 #include <math.h>
 #include <stdio.h>
-#include <stdlib.h>
-
-const char *csfh_format_value(char buf[32], double value)
-{
-    for (int precision = 6; precision <= 17; precision++) {
-        snprintf(buf, 32, "%.*g", precision, value);
-        if (strtod(buf, NULL) == value) {
-            break;
-        }
-    }
-    return buf;
-}
 
 int csfh_check_value(const csfh_variable_t *v, double value, char *msg, size_t msg_size)
 {

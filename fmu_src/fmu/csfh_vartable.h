@@ -6,6 +6,7 @@
 
 #include <stddef.h>
 
+#include "csfh_format.h"
 #include "csfh_visibility.h"
 
 CSFH_INTERNAL_BEGIN
@@ -27,7 +28,7 @@ typedef enum {
 } csfh_causality_t;
 
 typedef enum {
-    CSFH_STORE_PLAIN,   /* stored in csfh_model_t, read and written directly */
+    CSFH_STORE_PLAIN,   /* stored in the model struct, read and written directly */
     CSFH_STORE_COMPUTED /* output or derivative: recomputed on demand before it is read */
 } csfh_storage_t;
 
@@ -39,7 +40,7 @@ typedef struct {
     int tunable;             /* variability == tunable */
     int is_state;
     csfh_storage_t storage;
-    size_t offset;           /* offset of the value inside csfh_model_t */
+    size_t offset;           /* offset of the value inside the model struct */
     int has_start;
     double start;
     int has_range;           /* value must lie in lo..hi (open or closed ends) */
@@ -51,9 +52,6 @@ typedef struct {
 /* Check one value against the variable's range and finiteness. Returns 0 if valid, else writes
  * a message naming the variable and the value (csfh_vartable.c). */
 int csfh_check_value(const csfh_variable_t *v, double value, char *msg, size_t msg_size);
-
-/* Shortest "%g" text that reads back as the same double (0.3, not 0.29999999999999999). */
-const char *csfh_format_value(char buf[32], double value);
 
 CSFH_INTERNAL_END
 

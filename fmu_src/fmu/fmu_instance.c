@@ -709,7 +709,7 @@ fmu_status_t fmu_set_values(fmu_instance_t *inst, const char *function, const un
 /* FMU state */
 
 #define FMU_STATE_MAGIC 0x48465343u /* "CSFH" */
-#define FMU_STATE_VERSION 3u
+#define FMU_STATE_VERSION 4u /* raised with every change of the snapshot's layout */
 
 /* An FMU state: this header, then the model struct (fmu_model.size bytes). The header holds no
  * enum types: its bytes may come from anywhere (deserialization), and every field is

@@ -6,100 +6,32 @@
 #include <string.h>
 
 #include "csfh_common.h"
+#include "csfh_format.h"
 #include "csfh_friction.h"
-#include "csfh_variables.h"
 
 
-const csfh_variable_t *csfh_variable_by_vr(unsigned int vr)
-{
-    for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES; i++) {
-        if (csfh_variables[i].vr == vr) {
-            return &csfh_variables[i];
-        }
-    }
-    return NULL;
-}
-
-const csfh_variable_t *csfh_variable_by_name(const char *name)
-{
-    if (name == NULL) {
-        return NULL;
-    }
-    for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES; i++) {
-        if (strcmp(csfh_variables[i].name, name) == 0) {
-            return &csfh_variables[i];
-        }
-    }
-    return NULL;
-}
-
-double *csfh_variable_real(csfh_model_t *m, const csfh_variable_t *v)
-{
-    return (double *)((char *)m + v->offset);
-}
-
-int *csfh_variable_int(csfh_model_t *m, const csfh_variable_t *v)
-{
-    return (int *)((char *)m + v->offset);
-}
-
-void csfh_model_set_defaults(csfh_model_t *m)
-{
-    memset(m, 0, sizeof(*m));
-    for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES; i++) {
-        const csfh_variable_t *v = &csfh_variables[i];
-        if (!v->has_start) {
-            continue;
-        }
-        if (v->type == CSFH_TYPE_REAL) {
-            *csfh_variable_real(m, v) = v->start;
-        } else {
-            *csfh_variable_int(m, v) = (int)v->start;
-        }
-    }
-}
-
-static int check_all_values(csfh_model_t *m, char *msg, size_t msg_size)
-{
-    for (int i = 0; i < CSFH_NUMBER_OF_VARIABLES; i++) {
-        const csfh_variable_t *v = &csfh_variables[i];
-        const int checked = v->causality == CSFH_CAUS_PARAMETER || v->is_state ||
-                            v->causality == CSFH_CAUS_INPUT;
-        if (!checked) {
-            continue;
-        }
-        const double value = v->type == CSFH_TYPE_REAL ? *csfh_variable_real(m, v)
-                                                       : (double)*csfh_variable_int(m, v);
-        if (csfh_check_value(v, value, msg, msg_size) != 0) {
-            return -1;
-        }
-    }
-    return 0;
-}
-
-/* A derived quantity, by the name of its variable, and what it is derived from (for the message
- * when it is not finite). */
+/* A quantity, by the name of its variable, and its value (for messages). */
 typedef struct {
     const char *name;
     double value;
-    const char *const *from; /* NULL-terminated variable names */
+} named_value_t;
+
+/* A derived quantity and what it is derived from (for the message when it is not finite). */
+typedef struct {
+    named_value_t q;
+    const named_value_t *from; /* ending with a NULL name */
 } derived_check_t;
 
 /* "contact.esdu_F_max = inf is not finite (derived from contact.E1 = 1e+308, ...)" */
-static void derived_not_finite(csfh_model_t *m, const derived_check_t *q, char *msg,
-                               size_t msg_size)
+static void derived_not_finite(const derived_check_t *d, char *msg, size_t msg_size)
 {
     char b[32];
-    int n = snprintf(msg, msg_size, "%s = %s is not finite (derived from ", q->name,
-                     csfh_format_value(b, q->value));
-    for (const char *const *name = q->from; *name != NULL; name++) {
-        const csfh_variable_t *v = csfh_variable_by_name(*name);
-        const double value = v == NULL                    ? NAN
-                             : v->type == CSFH_TYPE_REAL ? *csfh_variable_real(m, v)
-                                                         : (double)*csfh_variable_int(m, v);
+    int n = snprintf(msg, msg_size, "%s = %s is not finite (derived from ", d->q.name,
+                     csfh_format_value(b, d->q.value));
+    for (const named_value_t *v = d->from; v->name != NULL; v++) {
         if (n >= 0 && (size_t)n < msg_size) {
-            n += snprintf(msg + n, msg_size - (size_t)n, "%s%s = %s", name == q->from ? "" : ", ",
-                          *name, csfh_format_value(b, value));
+            n += snprintf(msg + n, msg_size - (size_t)n, "%s%s = %s", v == d->from ? "" : ", ",
+                          v->name, csfh_format_value(b, v->value));
         }
     }
     if (n >= 0 && (size_t)n < msg_size) {
@@ -107,24 +39,74 @@ static void derived_not_finite(csfh_model_t *m, const derived_check_t *q, char *
     }
 }
 
+/* Every derived quantity finite, else the message names it, its value and the parameters it is
+ * derived from, with their values (e.g. contact.E1 = contact.E2 = 1e308 overflow the ESDU force
+ * scale): 0, or -1. */
+static int check_derived(const csfh_params_t *p, const csfh_derived_t *d, char *msg,
+                         size_t msg_size)
+{
+#define END {NULL, 0.0}
+    const named_value_t E1 = {"contact.E1", p->E1}, nu1 = {"contact.nu1", p->nu1};
+    const named_value_t E2 = {"contact.E2", p->E2}, nu2 = {"contact.nu2", p->nu2};
+    const named_value_t R1 = {"contact.R1", p->R1}, R2 = {"contact.R2", p->R2};
+    const named_value_t L = {"contact.L", p->L};
+    const named_value_t rho = {"flexure.rho", p->rho}, phi = {"flexure.phi_root", p->phi_root};
+    const named_value_t beta = {"flexure.beta", p->beta};
+    const named_value_t from_delta[] = {R1, R2, END};
+    const named_value_t from_spheres[] = {E1, nu1, E2, nu2, R1, R2, END};
+    const named_value_t from_cylinders[] = {E1, nu1, E2, nu2, L, END};
+    const named_value_t from_spheres_given[] = {{"contact.K_spheres_given", p->K_spheres_given}, END};
+    const named_value_t from_cylinders_given[] = {{"contact.K_cylinders_given", p->K_cylinders_given},
+                                                  END};
+    const named_value_t from_xi[] = {{"contact.law", (double)p->law}, {"contact.cr", p->cr}, END};
+    const named_value_t from_esdu[] = {E1, nu1, E2, nu2, L, R1, R2,
+                                       {"contact.esdu_sigma_pi", (double)p->esdu_sigma_pi}, END};
+    const named_value_t from_sbar1[] = {{"flexure.OF[1]", p->OF[0]}, rho, phi, beta, END};
+    const named_value_t from_sbar2[] = {{"flexure.OF[2]", p->OF[1]}, rho, phi, beta, END};
+    const named_value_t from_E_star[] = {E1, nu1, E2, nu2, END};
+#undef END
+    const derived_check_t derived[] = {
+        {{"contact.delta", d->delta}, from_delta},
+        {{"contact.K_spheres", d->K_spheres}, p->K_from_materials ? from_spheres : from_spheres_given},
+        {{"contact.K_cylinders", d->K_cylinders},
+         p->K_from_materials ? from_cylinders : from_cylinders_given},
+        {{"contact.xi", d->xi}, from_xi},
+        {{"contact.esdu_F_max", d->esdu_F_max}, from_esdu},
+        {{"flexure.sbar[1]", d->sbar[0]}, from_sbar1},
+        {{"flexure.sbar[2]", d->sbar[1]}, from_sbar2},
+        /* not FMU variables: named by what they are */
+        {{"the contact modulus E* (Hertz line contact)", d->E_star}, from_E_star},
+        {{"the conformal radius R1 R2 / (R2 - R1)", d->R_conformal}, from_delta},
+    };
+    for (size_t i = 0; i < sizeof(derived) / sizeof(derived[0]); i++) {
+        if (!isfinite(derived[i].q.value)) {
+            derived_not_finite(&derived[i], msg, msg_size);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+/* The normal law's parameters (docs/model.md §4): its stiffness and exponent (the cylinders'
+ * for LN_cylinders, the spheres' for the others and for the ESDU reading I3). */
+static void normal_law_setup(const csfh_params_t *p, csfh_derived_t *d)
+{
+    d->normal.law = (csfh_contact_law_t)p->law;
+    d->normal.esdu_reading = (csfh_esdu_reading_t)p->esdu_reading;
+    d->normal.xi = d->xi;
+    d->normal.v_min = p->v_min;
+    if (p->law == CSFH_CONTACTLAW_LN_CYLINDERS) {
+        d->normal.K = d->K_cylinders;
+        d->normal.n = p->n_cylinders;
+    } else {
+        d->normal.K = d->K_spheres; /* spheres, HC, Flores; the exponent of LN-ESDU I3 */
+        d->normal.n = p->n_spheres;
+    }
+}
+
 int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
 {
     const csfh_params_t *p = &m->p;
-    if (check_all_values(m, msg, msg_size) != 0) {
-        return -1;
-    }
-    /* the Enumeration parameters set as Integers (for importers that ignore Enumerations); the
-     * numbers are range-checked above like the Enumerations */
-    if (m->p.law_number != 0) {
-        m->p.law = m->p.law_number;
-    }
-    if (m->p.esdu_reading_number != 0) {
-        m->p.esdu_reading = m->p.esdu_reading_number;
-    }
-    if (m->cs_method_number != 0) {
-        m->cs_method = m->cs_method_number;
-    }
-    /* cross-checks */
     char b1[32], b2[32];
     if (!(p->R1 < p->R2)) {
         snprintf(msg, msg_size, "contact.R1 = %s must be smaller than contact.R2 = %s",
@@ -151,17 +133,7 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
     csfh_esdu_setup(p->E1, p->nu1, p->E2, p->nu2, p->L, d.delta, p->esdu_sigma_pi,
                     &d.normal.esdu);
     d.esdu_F_max = d.normal.esdu.F_max;
-    d.normal.law = (csfh_contact_law_t)p->law;
-    d.normal.esdu_reading = (csfh_esdu_reading_t)p->esdu_reading;
-    d.normal.xi = d.xi;
-    d.normal.v_min = p->v_min;
-    if (p->law == CSFH_CONTACTLAW_LN_CYLINDERS) {
-        d.normal.K = d.K_cylinders;
-        d.normal.n = p->n_cylinders;
-    } else {
-        d.normal.K = d.K_spheres; /* spheres, HC, Flores; the exponent of LN-ESDU I3 */
-        d.normal.n = p->n_spheres;
-    }
+    normal_law_setup(p, &d);
     const csfh_arc_beam_t beam = {p->rho, p->beta, p->Eh, p->nuh, p->h, p->b, p->kappa,
                                   p->bending_only};
     if (csfh_flexure_setup(&beam, p->OF, p->phi_root, p->conservative, &d.flexure) != 0) {
@@ -179,44 +151,8 @@ int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size)
     d.R_conformal = p->R1 * p->R2 / (p->R2 - p->R1);
     d.shock_dir[0] = cos(p->shock_angle);
     d.shock_dir[1] = sin(p->shock_angle);
-    /* every derived quantity finite, else the message names it, its value and the parameters
-     * it is derived from, with their values (e.g. contact.E1 = contact.E2 = 1e308 overflow the
-     * ESDU force scale) */
-    static const char *const from_delta[] = {"contact.R1", "contact.R2", NULL};
-    static const char *const from_spheres[] = {"contact.E1", "contact.nu1", "contact.E2",
-                                               "contact.nu2", "contact.R1", "contact.R2", NULL};
-    static const char *const from_cylinders[] = {"contact.E1", "contact.nu1", "contact.E2",
-                                                 "contact.nu2", "contact.L", NULL};
-    static const char *const from_spheres_given[] = {"contact.K_spheres_given", NULL};
-    static const char *const from_cylinders_given[] = {"contact.K_cylinders_given", NULL};
-    static const char *const from_xi[] = {"contact.law", "contact.cr", NULL};
-    static const char *const from_esdu[] = {"contact.E1", "contact.nu1", "contact.E2",
-                                            "contact.nu2", "contact.L",  "contact.R1",
-                                            "contact.R2", "contact.esdu_sigma_pi", NULL};
-    static const char *const from_sbar1[] = {"flexure.OF[1]", "flexure.rho", "flexure.phi_root",
-                                             "flexure.beta", NULL};
-    static const char *const from_sbar2[] = {"flexure.OF[2]", "flexure.rho", "flexure.phi_root",
-                                             "flexure.beta", NULL};
-    static const char *const from_E_star[] = {"contact.E1", "contact.nu1", "contact.E2",
-                                              "contact.nu2", NULL};
-    const derived_check_t derived[] = {
-        {"contact.delta", d.delta, from_delta},
-        {"contact.K_spheres", d.K_spheres, p->K_from_materials ? from_spheres : from_spheres_given},
-        {"contact.K_cylinders", d.K_cylinders,
-         p->K_from_materials ? from_cylinders : from_cylinders_given},
-        {"contact.xi", d.xi, from_xi},
-        {"contact.esdu_F_max", d.esdu_F_max, from_esdu},
-        {"flexure.sbar[1]", d.sbar[0], from_sbar1},
-        {"flexure.sbar[2]", d.sbar[1], from_sbar2},
-        /* not FMU variables: named by what they are */
-        {"the contact modulus E* (Hertz line contact)", d.E_star, from_E_star},
-        {"the conformal radius R1 R2 / (R2 - R1)", d.R_conformal, from_delta},
-    };
-    for (size_t i = 0; i < sizeof(derived) / sizeof(derived[0]); i++) {
-        if (!isfinite(derived[i].value)) {
-            derived_not_finite(m, &derived[i], msg, msg_size);
-            return -1;
-        }
+    if (check_derived(p, &d, msg, msg_size) != 0) {
+        return -1;
     }
     m->d = d;
     return 0;
@@ -281,30 +217,12 @@ void csfh_model_smooth_forces(csfh_model_t *m, double t, const double q[3], doub
     }
 }
 
-void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
-                        csfh_contact_eval_t *c)
+/* The contact force at (q, u) where the bodies touch (the kinematics give gap < 0), with the
+ * onset rate captured at the event (docs/model.md §5.2) in the contact mode, else (by the gap)
+ * the state's own rate, continuous at the event. */
+static void contact_force(csfh_model_t *m, const double q[3], const double u[3],
+                          csfh_contact_eval_t *c)
 {
-    c->touching = 0;
-    c->F_N = c->F_T = 0.0;
-    c->rho = c->rho_dot = 0.0;
-    c->status = CSFH_LAW_OK;
-    if (m->p.law == CSFH_CONTACTLAW_NONE) {
-        return;
-    }
-    csfh_count(&m->counters.contact);
-    /* The contact force acts in the contact mode only, the mode the event update sets where the
-     * gap crosses 0 (the relation gap < 0 is frozen between events, as FMI and Modelica do).
-     * A state inside the gap that the integrator probes before it has located the onset thus
-     * sees the smooth flight forces, and the onset (time, rate) lies on the smooth flight
-     * solution: a step that reaches past the onset does not smear the stiff contact force
-     * into the interpolant the root finder uses. (contact_by_gap: the paper's RK4 scheme.) */
-    if (!m->z.in_contact && !m->contact_by_gap) {
-        return;
-    }
-    if (!m->z.in_contact && !(csfh_contact_gap(m->d.delta, m->p.s1bar, q) < 0.0)) {
-        return; /* contact_by_gap, in flight: the gap alone */
-    }
-    /* in the contact mode the bodies touch almost always: the kinematics (with the gap) once */
     csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, q, &c->kin);
     if (!(c->kin.gap < 0.0)) {
         return;
@@ -312,8 +230,6 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
     c->touching = 1;
     c->rho = -c->kin.gap;
     c->rho_dot = -(c->kin.DN[0] * u[0] + c->kin.DN[1] * u[1] + c->kin.DN[2] * u[2]);
-    /* the onset rate captured at the event (docs/model.md §5.2); before the event (contact_by_gap)
-     * the state's own rate, continuous at the event */
     const double onset = m->z.in_contact ? m->z.onset_speed : c->rho_dot;
     c->status = csfh_normal_force(&m->d.normal, c->rho, c->rho_dot, onset, &c->F_N);
     if (m->p.friction_enabled && c->F_N > 0.0) {
@@ -323,13 +239,59 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
     }
 }
 
-int csfh_model_derivatives(csfh_model_t *m, double t, const double x[6], double xdot[6])
+/* No contact force yet; 0 if no law is selected (nothing evaluated, nothing counted). */
+static int contact_begin(csfh_model_t *m, csfh_contact_eval_t *c)
+{
+    c->touching = 0;
+    c->F_N = c->F_T = 0.0;
+    c->rho = c->rho_dot = 0.0;
+    c->status = CSFH_LAW_OK;
+    if (m->p.law == CSFH_CONTACTLAW_NONE) {
+        return 0;
+    }
+    csfh_count(&m->counters.contact);
+    return 1;
+}
+
+void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
+                        csfh_contact_eval_t *c)
+{
+    /* The contact force acts in the contact mode only, the mode the event update sets where the
+     * gap crosses 0 (the relation gap < 0 is frozen between events, as FMI and Modelica do).
+     * A state inside the gap that the integrator probes before it has located the onset thus
+     * sees the smooth flight forces, and the onset (time, rate) lies on the smooth flight
+     * solution: a step that reaches past the onset does not smear the stiff contact force
+     * into the interpolant the root finder uses. In the contact mode the bodies touch almost
+     * always: the kinematics (with the gap) once. */
+    if (contact_begin(m, c) && m->z.in_contact) {
+        contact_force(m, q, u, c);
+    }
+}
+
+void csfh_model_contact_by_gap(csfh_model_t *m, const double q[3], const double u[3],
+                               csfh_contact_eval_t *c)
+{
+    if (!contact_begin(m, c)) {
+        return;
+    }
+    if (!m->z.in_contact && !(csfh_contact_gap(m->d.delta, m->p.s1bar, q) < 0.0)) {
+        return; /* in flight: the gap alone */
+    }
+    contact_force(m, q, u, c);
+}
+
+/* The contact force of one of the two rules (csfh_model_contact, csfh_model_contact_by_gap). */
+typedef void (*contact_rule_t)(csfh_model_t *m, const double q[3], const double u[3],
+                               csfh_contact_eval_t *c);
+
+static inline int derivatives(csfh_model_t *m, contact_rule_t contact, double t,
+                              const double x[6], double xdot[6])
 {
     csfh_count(&m->counters.rhs);
     double Q[3];
     csfh_model_smooth_forces(m, t, x, Q);
     csfh_contact_eval_t c;
-    csfh_model_contact(m, x, x + 3, &c);
+    contact(m, x, x + 3, &c);
     if (c.touching) {
         csfh_contact_add_force(&c.kin, c.F_N, c.F_T, Q);
     }
@@ -345,6 +307,16 @@ int csfh_model_derivatives(csfh_model_t *m, double t, const double x[6], double 
         }
     }
     return c.status == CSFH_LAW_ESDU_CLAMPED ? CSFH_WARN_ESDU_CLAMPED : CSFH_OK;
+}
+
+int csfh_model_derivatives(csfh_model_t *m, double t, const double x[6], double xdot[6])
+{
+    return derivatives(m, csfh_model_contact, t, x, xdot);
+}
+
+int csfh_model_derivatives_by_gap(csfh_model_t *m, double t, const double x[6], double xdot[6])
+{
+    return derivatives(m, csfh_model_contact_by_gap, t, x, xdot);
 }
 
 double csfh_model_event_indicator(const csfh_model_t *m, const double x[6])
@@ -476,19 +448,17 @@ void csfh_model_stresses(const csfh_model_t *m, const double q[3], double F_N,
                                                    &s->contact_half_width);
 }
 
-int csfh_model_outputs(csfh_model_t *m)
+/* The contact outputs at x: forces, gap, indentation and its rate, sliding speed. */
+static void contact_outputs(csfh_model_t *m, const csfh_contact_eval_t *c, const double *x,
+                            csfh_outputs_t *o)
 {
-    csfh_outputs_t *o = &m->out;
-    const double *x = m->x;
-    csfh_contact_eval_t c;
-    csfh_model_contact(m, x, x + 3, &c);
-    o->F_N = c.F_N;
-    o->F_T = c.F_T;
-    if (c.touching) {
-        o->gap = c.kin.gap;
-        o->indentation = c.rho;
-        o->indentation_rate = c.rho_dot;
-        o->v_T = c.kin.DT[0] * x[3] + c.kin.DT[1] * x[4] + c.kin.DT[2] * x[5];
+    o->F_N = c->F_N;
+    o->F_T = c->F_T;
+    if (c->touching) {
+        o->gap = c->kin.gap;
+        o->indentation = c->rho;
+        o->indentation_rate = c->rho_dot;
+        o->v_T = c->kin.DT[0] * x[3] + c->kin.DT[1] * x[4] + c->kin.DT[2] * x[5];
     } else {
         csfh_contact_kin_t kin;
         csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, x, &kin);
@@ -497,6 +467,34 @@ int csfh_model_outputs(csfh_model_t *m)
         o->indentation_rate = -(kin.DN[0] * x[3] + kin.DN[1] * x[4] + kin.DN[2] * x[5]);
         o->v_T = kin.DT[0] * x[3] + kin.DT[1] * x[4] + kin.DT[2] * x[5];
     }
+}
+
+/* The peak outputs: the communication step's so far (co-simulation), and the current values;
+ * the flexure stress only where it is tracked. Then what follows from them: p0 increases with
+ * F_N, so the pressure of the peak force is the peak pressure (§14.5), and the margins
+ * 1 - peak / allowable (§14.4): 1 unloaded, 0 at the allowable, < 0 beyond. */
+static void peak_outputs(const csfh_model_t *m, const double *peaks, csfh_outputs_t *o)
+{
+    const double now[CSFH_N_PEAKS] = {o->F_N, fabs(o->F_T), o->indentation, o->stress_max};
+    double *peak[CSFH_N_PEAKS] = {&o->F_N_peak, &o->F_T_peak, &o->indentation_peak,
+                                  &o->stress_max_peak};
+    for (int j = 0; j < CSFH_N_PEAKS; j++) {
+        const int tracked = peaks != NULL && (j < 3 || m->p.track_stress_peak);
+        *peak[j] = tracked && peaks[j] > now[j] ? peaks[j] : now[j];
+    }
+    o->pressure_max_peak =
+        csfh_hertz_line_pressure(o->F_N_peak, m->d.E_star, m->p.L, m->d.R_conformal, NULL);
+    o->stress_margin = 1.0 - o->stress_max_peak / m->p.stress_allowable;
+    o->pressure_margin = 1.0 - o->pressure_max_peak / m->p.pressure_allowable;
+}
+
+static int outputs(csfh_model_t *m, contact_rule_t contact, const double *peaks,
+                   csfh_outputs_t *o)
+{
+    const double *x = m->x;
+    csfh_contact_eval_t c;
+    contact(m, x, x + 3, &c);
+    contact_outputs(m, &c, x, o);
     o->E_kinetic = 0.5 * m->p.m1 * (x[3] * x[3] + x[4] * x[4]) + 0.5 * m->p.I1 * x[5] * x[5];
     o->E_gravity = m->p.m1 * m->p.g * x[1];
     o->E_flexure = 0.0;
@@ -514,21 +512,17 @@ int csfh_model_outputs(csfh_model_t *m)
     o->stress_location = st.flexure_location;
     o->pressure_max = st.contact_pressure;
     o->half_width = st.contact_half_width;
-    /* peaks: the communication step's so far (co-simulation), and the current values; the
-     * flexure stress only where it is tracked */
-    const double now[CSFH_N_PEAKS] = {o->F_N, fabs(o->F_T), o->indentation, o->stress_max};
-    double *peak[CSFH_N_PEAKS] = {&o->F_N_peak, &o->F_T_peak, &o->indentation_peak,
-                                  &o->stress_max_peak};
-    for (int j = 0; j < CSFH_N_PEAKS; j++) {
-        const int tracked = m->peaks.active && (j < 3 || m->p.track_stress_peak);
-        *peak[j] = tracked && m->peaks.v[j] > now[j] ? m->peaks.v[j] : now[j];
-    }
-    /* p0 increases with F_N: the pressure of the peak force is the peak pressure (§14.5) */
-    o->pressure_max_peak =
-        csfh_hertz_line_pressure(o->F_N_peak, m->d.E_star, m->p.L, m->d.R_conformal, NULL);
-    /* margins 1 - peak / allowable (§14.4): 1 unloaded, 0 at the allowable, < 0 beyond */
-    o->stress_margin = 1.0 - o->stress_max_peak / m->p.stress_allowable;
-    o->pressure_margin = 1.0 - o->pressure_max_peak / m->p.pressure_allowable;
+    peak_outputs(m, peaks, o);
     csfh_model_frame_acceleration(m, m->time, o->a_frame);
     return c.status == CSFH_LAW_ESDU_CLAMPED ? CSFH_WARN_ESDU_CLAMPED : CSFH_OK;
+}
+
+int csfh_model_outputs(csfh_model_t *m, const double *peaks, csfh_outputs_t *out)
+{
+    return outputs(m, csfh_model_contact, peaks, out);
+}
+
+int csfh_model_outputs_by_gap(csfh_model_t *m, csfh_outputs_t *out)
+{
+    return outputs(m, csfh_model_contact_by_gap, NULL, out);
 }

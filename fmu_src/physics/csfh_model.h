@@ -1,8 +1,9 @@
 /* The CSFH model: parameters, states and the right-hand side of
  * M q'' = Q_e + Q_g + Q_c + Q_ext + Q_base (docs/model.md conventions, paper Eqs. 27-30; the base
  * acceleration of docs/model.md §14.1), plus the contact mode logic of the event-driven compliant
- * models and the stress outputs (§14.2-14.4). No FMI types here: the FMI glue, the CVODE co-simulation and the Python
- * harness (through the core library) call these functions. */
+ * models and the outputs with the stresses (§12, §14.2-14.4). No solver, FMI or importer fields
+ * here: the FMU (../models/csfh/), the solvers and the Python harness (through the core library)
+ * call these functions. */
 #ifndef CSFH_MODEL_H
 #define CSFH_MODEL_H
 
@@ -12,7 +13,6 @@
 #include "csfh_enums.h"
 #include "csfh_flexure.h"
 #include "csfh_normal_law.h"
-#include "csfh_vartable.h"
 #include "csfh_visibility.h"
 
 CSFH_INTERNAL_BEGIN
@@ -25,7 +25,6 @@ typedef struct {
     double g;          /* m/s^2, along -Y */
     /* contact */
     int law;           /* csfh_contact_law_t */
-    int law_number, esdu_reading_number; /* 0, or the enumeration value to set (libcosim) */
     double R1, R2;     /* m */
     double E1, E2, nu1, nu2;
     double L;          /* contact length, m */
@@ -46,7 +45,7 @@ typedef struct {
     int flexure_enabled, bending_only, conservative;
     double rho, beta, OF[2], phi_root, h, b, Eh, nuh, kappa;
     double stress_allowable; /* Pa: allowable normal stress of the flexure */
-    int track_stress_peak;   /* co-simulation: track the flexure stress peak inside the step */
+    int track_stress_peak;   /* co-simulation: the flexure stress peak is tracked (§14.5) */
     /* half-sine shock pulse of the frame (docs/model.md §14.8) */
     double shock_peak;       /* m/s^2; 0: no pulse */
     double shock_duration;   /* s */
@@ -83,49 +82,36 @@ typedef struct {
 
 typedef struct {
     int rhs, flexure, contact, friction; /* evaluation counters (saturate at INT_MAX) */
-    int steps;                           /* integrator steps (co-simulation) */
 } csfh_counters_t;
 
 typedef struct {
     double F_N, F_T, indentation, gap, v_T, indentation_rate;
     double E_total, E_kinetic, E_gravity, E_flexure, E_contact;
-    double F_N_peak, F_T_peak, indentation_peak; /* see csfh_peaks_t */
+    double F_N_peak, F_T_peak, indentation_peak; /* see CSFH_N_PEAKS */
     /* stresses (docs/model.md §14.2-14.4): evaluated with the outputs, never in the RHS */
     double stress_max, stress_location, stress_max_peak, stress_margin;
     double pressure_max, half_width, pressure_max_peak, pressure_margin;
     double a_frame[2]; /* the frame's acceleration at the output time: a_base + shock pulse */
 } csfh_outputs_t;
 
-/* Peak outputs (contact.F_N_peak, contact.F_T_peak = the largest |F_T|,
- * contact.indentation_peak, flexure.stress_max_peak): in co-simulation the largest values over
- * the last communication step (its end included), located on the integrator's interpolant by
- * the co-simulation stepper (csfh_model_peak_values); where no step was taken (model exchange,
- * before the first fmi2DoStep) the instantaneous values. The flexure stress is tracked only
- * with flexure.track_stress_peak (it costs evaluations in flight too); contact.pressure_max_peak
- * is the pressure of contact.F_N_peak (p0 grows with F_N: docs/model.md §14.5). */
+/* The peak quantities (contact.F_N_peak, contact.F_T_peak = the largest |F_T|,
+ * contact.indentation_peak, flexure.stress_max_peak): F_N, |F_T|, the indentation and the
+ * flexure stress, whose largest values over a communication step the FMU tracks in
+ * co-simulation (../models/csfh/csfh_peaks.c); where no step was taken (model exchange, the
+ * harness) the outputs are the instantaneous values. The flexure stress counts only with
+ * flexure.track_stress_peak (it costs evaluations in flight too); contact.pressure_max_peak is
+ * the pressure of contact.F_N_peak (p0 grows with F_N: docs/model.md §14.5). */
 #define CSFH_N_PEAKS 4
-typedef struct {
-    int active;               /* 1 after the first communication step */
-    double v[CSFH_N_PEAKS];   /* F_N, |F_T|, indentation, flexure stress so far in this step */
-} csfh_peaks_t;
 
 typedef struct {
     double time;
     double x[6];        /* x, y, theta, vx, vy, omega */
-    double der[6];      /* derivative cache for get-by-reference */
     double u_in[3];     /* F_ext[1], F_ext[2], M_ext */
     double a_base[2];   /* a_base[1], a_base[2]: acceleration of body 2 (the frame), global, m/s^2 */
     csfh_params_t p;
     csfh_derived_t d;
     csfh_discrete_t z;
-    csfh_outputs_t out;
     csfh_counters_t counters;
-    csfh_peaks_t peaks;
-    int cs_method;      /* solver.method (SolverMethod): read by the co-simulation glue only */
-    int cs_method_number; /* 0, or the solver.method value to set (libcosim) */
-    int contact_by_gap; /* 1: the contact force acts wherever the gap is negative, also before
-                         * the onset event (the paper's RK4 scheme, which has no root finding
-                         * and bisects the step instead); 0 (default): in the contact mode only */
 } csfh_model_t;
 
 /* Contact force evaluation at one state (for outputs and the Moreau harness). */
@@ -142,20 +128,9 @@ typedef struct {
 #define CSFH_WARN_ESDU_CLAMPED 1
 #define CSFH_ERR_NONFINITE (-1)
 
-/* Start values of every variable (the `paper` preset) from the generated table. */
-void csfh_model_set_defaults(csfh_model_t *m);
-
-/* Table access. */
-const csfh_variable_t *csfh_variable_by_vr(unsigned int vr);
-const csfh_variable_t *csfh_variable_by_name(const char *name);
-double *csfh_variable_real(csfh_model_t *m, const csfh_variable_t *v);
-int *csfh_variable_int(csfh_model_t *m, const csfh_variable_t *v);
-
-/* csfh_check_value: see csfh_vartable.h */
-
-/* Validate every parameter (ranges, finiteness, cross-checks such as R1 < R2 and v0 < v1) and
- * compute the derived quantities. Returns 0 on success, -1 with a message otherwise (the derived
- * quantities are then left unchanged). */
+/* The cross-checks of the parameters (R1 < R2, v0 < v1; their ranges are the variable table's:
+ * ../models/csfh/csfh_fmu.h) and the derived quantities, each checked finite. Returns 0 on
+ * success, -1 with a message otherwise (the derived quantities are then left unchanged). */
 int csfh_model_prepare(csfh_model_t *m, char *msg, size_t msg_size);
 
 /* End of initialization, before csfh_model_check_start: with initial.from_parameters the
@@ -199,6 +174,13 @@ void csfh_model_contact(csfh_model_t *m, const double q[3], const double u[3],
  * CSFH_ERR_NONFINITE if any derivative is not finite. */
 int csfh_model_derivatives(csfh_model_t *m, double t, const double x[6], double xdot[6]);
 
+/* The same with the contact force wherever the gap is negative, also before the onset event,
+ * with the state's own indentation rate until the onset is captured: the paper's RK4 scheme
+ * (../solvers/csfh_rk4event.c), which has no root finding and bisects the step instead. */
+void csfh_model_contact_by_gap(csfh_model_t *m, const double q[3], const double u[3],
+                               csfh_contact_eval_t *c);
+int csfh_model_derivatives_by_gap(csfh_model_t *m, double t, const double x[6], double xdot[6]);
+
 /* Event indicator of the contact: the gap, offset by the hysteresis so that it never sits at 0
  * right after an event (1 when the contact law is none: no events). */
 double csfh_model_event_indicator(const csfh_model_t *m, const double x[6]);
@@ -231,8 +213,12 @@ double csfh_model_flexure_stress(const csfh_model_t *m, const double q[3], doubl
 void csfh_model_stresses(const csfh_model_t *m, const double q[3], double F_N,
                          csfh_stresses_t *s);
 
-/* Fill m->out (forces, gap, energies, stresses, peaks, margins) at the current state. */
-int csfh_model_outputs(csfh_model_t *m);
+/* The outputs at the current state (forces, gap, energies, stresses, peaks, margins): the peak
+ * outputs take the largest of the current values and `peaks` (CSFH_N_PEAKS values so far in the
+ * communication step; NULL: none). CSFH_OK or CSFH_WARN_ESDU_CLAMPED. */
+int csfh_model_outputs(csfh_model_t *m, const double *peaks, csfh_outputs_t *out);
+/* ... with the contact force by the gap (the RK4 scheme: csfh_model_contact_by_gap), no peaks. */
+int csfh_model_outputs_by_gap(csfh_model_t *m, csfh_outputs_t *out);
 
 CSFH_INTERNAL_END
 

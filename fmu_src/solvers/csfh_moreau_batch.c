@@ -1,10 +1,10 @@
 #include "csfh_moreau_batch.h"
 
-long long csfh_api_moreau_batch(csfh_model_t *const *models, size_t n, double h, int stick_rule,
-                                double v_eps, double v_stick, double g_tol, double t0,
-                                const double *x0, long long n_steps, long long record_every,
-                                double *records, size_t max_records, double *impacts,
-                                size_t max_impacts, double *x_end, long long *stats, int *status)
+long long csfh_moreau_batch(csfh_model_t *const *models, size_t n, double h, int stick_rule,
+                            double v_eps, double v_stick, double g_tol, double t0,
+                            const double *x0, long long n_steps, long long record_every,
+                            double *records, size_t max_records, double *impacts,
+                            size_t max_impacts, double *x_end, long long *stats, int *status)
 {
     if (models == NULL || x0 == NULL || x_end == NULL || stats == NULL || status == NULL ||
         (records == NULL && max_records > 0) || (impacts == NULL && max_impacts > 0)) {

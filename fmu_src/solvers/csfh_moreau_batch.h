@@ -8,13 +8,12 @@
 
 #include <stddef.h>
 
-#include "csfh_api.h"
 #include "csfh_moreau.h"
 #include "csfh_visibility.h"
 
 CSFH_INTERNAL_BEGIN
 
-/* Number of statistics per variant written by csfh_api_moreau_batch (the order of
+/* Number of statistics per variant written by csfh_moreau_batch (the order of
  * csfh_moreau_stats_t: steps, active, stick, slip, fallback, onsets, records, impacts,
  * impacts_dropped). */
 #define CSFH_MOREAU_BATCH_NSTATS 9
@@ -28,13 +27,11 @@ CSFH_INTERNAL_BEGIN
  *   stats        n x CSFH_MOREAU_BATCH_NSTATS
  *   status       n return codes of csfh_moreau_run (CSFH_OK or CSFH_ERR_NONFINITE)
  * Returns the number of variants whose status is not CSFH_OK, or -1 for bad arguments. */
-CSFH_API long long csfh_api_moreau_batch(csfh_model_t *const *models, size_t n, double h,
-                                         int stick_rule, double v_eps, double v_stick,
-                                         double g_tol, double t0, const double *x0,
-                                         long long n_steps, long long record_every,
-                                         double *records, size_t max_records, double *impacts,
-                                         size_t max_impacts, double *x_end, long long *stats,
-                                         int *status);
+long long csfh_moreau_batch(csfh_model_t *const *models, size_t n, double h, int stick_rule,
+                            double v_eps, double v_stick, double g_tol, double t0,
+                            const double *x0, long long n_steps, long long record_every,
+                            double *records, size_t max_records, double *impacts,
+                            size_t max_impacts, double *x_end, long long *stats, int *status);
 
 CSFH_INTERNAL_END
 

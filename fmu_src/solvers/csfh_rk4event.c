@@ -5,23 +5,24 @@
 
 #include "csfh_contact.h"
 
-/* Classical RK4 step with the model's right-hand side (current discrete state). */
+/* Classical RK4 step with the model's right-hand side (current discrete state), the contact force
+ * by the gap (the paper's scheme: the force acts as soon as the gap is negative). */
 static int rk4_step(csfh_model_t *m, double t, const double x[6], double h, double xn[6])
 {
     double k1[6], k2[6], k3[6], k4[6], y[6];
-    int status = csfh_model_derivatives(m, t, x, k1);
+    int status = csfh_model_derivatives_by_gap(m, t, x, k1);
     for (int i = 0; i < 6; i++) {
         y[i] = x[i] + 0.5 * h * k1[i];
     }
-    status |= csfh_model_derivatives(m, t + 0.5 * h, y, k2);
+    status |= csfh_model_derivatives_by_gap(m, t + 0.5 * h, y, k2);
     for (int i = 0; i < 6; i++) {
         y[i] = x[i] + 0.5 * h * k2[i];
     }
-    status |= csfh_model_derivatives(m, t + 0.5 * h, y, k3);
+    status |= csfh_model_derivatives_by_gap(m, t + 0.5 * h, y, k3);
     for (int i = 0; i < 6; i++) {
         y[i] = x[i] + h * k3[i];
     }
-    status |= csfh_model_derivatives(m, t + h, y, k4);
+    status |= csfh_model_derivatives_by_gap(m, t + h, y, k4);
     for (int i = 0; i < 6; i++) {
         xn[i] = x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         if (!isfinite(xn[i])) {
@@ -34,17 +35,18 @@ static int rk4_step(csfh_model_t *m, double t, const double x[6], double h, doub
 static void write_record(csfh_model_t *m, double t, const double x[6], double *row)
 {
     memcpy(m->x, x, 6 * sizeof(double));
-    csfh_model_outputs(m);
+    csfh_outputs_t out;
+    csfh_model_outputs_by_gap(m, &out);
     row[0] = t;
     for (int i = 0; i < 6; i++) {
         row[1 + i] = x[i];
     }
-    row[7] = m->out.F_N;
-    row[8] = m->out.F_T;
-    row[9] = m->out.indentation;
-    row[10] = m->out.v_T;
-    row[11] = m->out.gap;
-    row[12] = m->out.E_total;
+    row[7] = out.F_N;
+    row[8] = out.F_T;
+    row[9] = out.indentation;
+    row[10] = out.v_T;
+    row[11] = out.gap;
+    row[12] = out.E_total;
 }
 
 int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
@@ -58,8 +60,6 @@ int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
     memcpy(x, x0, sizeof(x));
     memcpy(m->x, x0, sizeof(x));
     m->time = t0;
-    const int contact_by_gap = m->contact_by_gap;
-    m->contact_by_gap = 1; /* the paper's scheme: the force acts as soon as the gap is negative */
     csfh_model_init_discrete(m);
     double *current = NULL; /* the contact record being filled */
     if (m->z.in_contact && contacts != NULL && max_contacts > 0) {
@@ -122,7 +122,7 @@ int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
         }
         if (m->z.in_contact && current != NULL) {
             csfh_contact_eval_t c;
-            csfh_model_contact(m, x, x + 3, &c);
+            csfh_model_contact_by_gap(m, x, x + 3, &c);
             current[CSFH_CR_PEAK_F_N] = fmax(current[CSFH_CR_PEAK_F_N], c.F_N);
             current[CSFH_CR_MAX_INDENTATION] = fmax(current[CSFH_CR_MAX_INDENTATION], c.rho);
         }
@@ -138,6 +138,5 @@ int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
     }
     memcpy(x_end, x, sizeof(x));
     stats->rhs = m->counters.rhs - rhs_before;
-    m->contact_by_gap = contact_by_gap;
     return status;
 }

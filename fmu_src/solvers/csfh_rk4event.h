@@ -3,7 +3,8 @@
  * more than the event tolerance, the step is bisected until the penetration is within the
  * tolerance, the contact starts there (onset rate captured), and the integration continues with
  * the reduced step until the contact ends, after which the step returns to h0. The right-hand side
- * is the FMU's (csfh_model_derivatives), with the same contact-mode logic. */
+ * is the FMU's with the contact force by the gap (csfh_model_derivatives_by_gap): the scheme has
+ * no root finding, so the force acts wherever the gap is negative. */
 #ifndef CSFH_RK4EVENT_H
 #define CSFH_RK4EVENT_H
 

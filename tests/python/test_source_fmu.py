@@ -25,6 +25,7 @@ NOMINAL = {"body1.x": 0.01, "body1.y": 0.01, "body1.theta": 0.1}
 # the csfh FMU's own sources: the physics the FMU uses and the FMI glue, nothing of the harness
 CSFH_SOURCES = {
     "fmi2_glue.c",
+    "csfh_format.c",
     "fmu_instance.c",
     "cosimulation.c",
     "integration.c",
@@ -34,6 +35,7 @@ CSFH_SOURCES = {
     "auto_policy.c",
     "rk45.c",
     "csfh_fmu_model.c",
+    "csfh_fmu.c",
     "csfh_peaks.c",
     "csfh_flexure.c",
     "csfh_contact.c",

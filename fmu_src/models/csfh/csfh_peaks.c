@@ -31,31 +31,31 @@
 #define PEAK_ITERATIONS 40 /* at most (a few are used) */
 #define PEAK_RTOL 1.0      /* x the integration tolerance: the accuracy of a located maximum */
 
-void csfh_peaks_begin(void *mv, int outputs_current)
+void csfh_peaks_begin(void *fv, int outputs_current)
 {
-    csfh_model_t *m = (csfh_model_t *)mv;
-    m->peaks.active = 1;
+    csfh_fmu_t *f = (csfh_fmu_t *)fv;
+    f->peaks.active = 1;
     if (outputs_current) {
-        m->peaks.v[0] = m->out.F_N;
-        m->peaks.v[1] = fabs(m->out.F_T);
-        m->peaks.v[2] = m->out.indentation;
-        m->peaks.v[3] = m->p.track_stress_peak ? m->out.stress_max : 0.0;
+        f->peaks.v[0] = f->out.F_N;
+        f->peaks.v[1] = fabs(f->out.F_T);
+        f->peaks.v[2] = f->out.indentation;
+        f->peaks.v[3] = f->m.p.track_stress_peak ? f->out.stress_max : 0.0;
     } else {
-        csfh_model_peak_values(m, m->x, m->peaks.v);
+        csfh_model_peak_values(&f->m, f->m.x, f->peaks.v);
     }
 }
 
-static void peaks_add(csfh_model_t *m, const double *v)
+static void peaks_add(csfh_fmu_t *f, const double *v)
 {
     for (int j = 0; j < N; j++) {
-        m->peaks.v[j] = v[j] > m->peaks.v[j] ? v[j] : m->peaks.v[j];
+        f->peaks.v[j] = v[j] > f->peaks.v[j] ? v[j] : f->peaks.v[j];
     }
 }
 
 /* The peak quantities v at time t of the step, and their time derivatives in slope (a forward
  * difference along the derivative of the state); 0 when there is nothing to track there.
  * y_at_t, f_at_t: the state and its derivative at t if known (else NULL: interpolated). */
-static int peak_point(csfh_model_t *m, const fmu_step_t *step, double t, const double *y_at_t,
+static int peak_point(csfh_fmu_t *f, const fmu_step_t *step, double t, const double *y_at_t,
                       const double *f_at_t, double *v, double *slope)
 {
     t = t < step->t0 ? step->t0 : (t > step->tn ? step->tn : t); /* round-off at the ends */
@@ -65,7 +65,7 @@ static int peak_point(csfh_model_t *m, const fmu_step_t *step, double t, const d
     } else if (step->dense(step, t, 0, py) < 0) {
         return 0;
     }
-    if (!csfh_model_peak_values(m, py, v)) {
+    if (!csfh_model_peak_values(&f->m, py, v)) {
         return 0;
     }
     if (f_at_t != NULL) {
@@ -78,7 +78,7 @@ static int peak_point(csfh_model_t *m, const fmu_step_t *step, double t, const d
         pd[i] = py[i] + eps * pd[i];
     }
     double ve[N];
-    csfh_model_peak_values(m, pd, ve);
+    csfh_model_peak_values(&f->m, pd, ve);
     for (int j = 0; j < N; j++) {
         slope[j] = (ve[j] - v[j]) / eps;
     }
@@ -130,7 +130,7 @@ typedef struct {
 
 /* The maximum of quantity j in the bracket: its time in *best_t and the quantities there in
  * best (best_v: its value; -INFINITY and NaN if the search evaluated nothing). */
-static double peak_search(csfh_model_t *m, const fmu_step_t *step, int j, bracket_t b,
+static double peak_search(csfh_fmu_t *f, const fmu_step_t *step, int j, bracket_t b,
                           double *best_t, double *best)
 {
     double best_v = -INFINITY;
@@ -148,7 +148,7 @@ static double peak_search(csfh_model_t *m, const fmu_step_t *step, int j, bracke
         u = u < 0.01 ? 0.01 : (u > 0.99 ? 0.99 : u); /* the bracket must shrink */
         const double mid = b.lo + u * L;
         double v[N], s[N];
-        if (!peak_point(m, step, mid, NULL, NULL, v, s)) {
+        if (!peak_point(f, step, mid, NULL, NULL, v, s)) {
             break;
         }
         if (v[j] > best_v) {
@@ -166,7 +166,7 @@ static double peak_search(csfh_model_t *m, const fmu_step_t *step, int j, bracke
 
 /* The maxima inside a step with values and slopes v0, s0 at its start and v1, s1 at its end:
  * their times and the quantities there; returns how many. */
-static int peak_maxima(csfh_model_t *m, const fmu_step_t *step, const double *v0,
+static int peak_maxima(csfh_fmu_t *f, const fmu_step_t *step, const double *v0,
                        const double *s0, const double *v1, const double *s1, double *max_t,
                        double (*max_v)[N])
 {
@@ -177,7 +177,7 @@ static int peak_maxima(csfh_model_t *m, const fmu_step_t *step, const double *v0
         }
         const bracket_t b = {step->t0, step->tn, v0[j], v1[j], s0[j], s1[j]};
         double best_t, best[N];
-        const double best_v = peak_search(m, step, j, b, &best_t, best);
+        const double best_v = peak_search(f, step, j, b, &best_t, best);
         if (best_v > v0[j] && best_v > v1[j]) { /* inside the step, above its ends */
             max_t[n_max] = best_t;
             memcpy(max_v[n_max], best, sizeof(best));
@@ -190,7 +190,7 @@ static int peak_maxima(csfh_model_t *m, const fmu_step_t *step, const double *v0
 /* --- live steps: analysed when taken ----------------------------------------------------- */
 
 /* Analyse the live step: its maxima and its end (into the live memory). */
-static void live_step(csfh_model_t *m, const fmu_step_t *step, csfh_step_peaks_t *mem)
+static void live_step(csfh_fmu_t *f, const fmu_step_t *step, csfh_step_peaks_t *mem)
 {
     double v1[N], s1[N], s0[N], v0[N];
     const int have_start = mem->end_valid && mem->t_end == step->t0;
@@ -199,12 +199,12 @@ static void live_step(csfh_model_t *m, const fmu_step_t *step, csfh_step_peaks_t
         memcpy(s0, mem->s1, sizeof(s0));
         memcpy(v0, mem->v1, sizeof(v0));
     }
-    if (!peak_point(m, step, step->tn, step->y1, NULL, v1, s1)) {
+    if (!peak_point(f, step, step->tn, step->y1, NULL, v1, s1)) {
         mem->end_valid = 0;
         return;
     }
-    if (have_start || peak_point(m, step, step->t0, NULL, NULL, v0, s0)) {
-        mem->n_max = peak_maxima(m, step, v0, s0, v1, s1, mem->max_t, mem->max_v);
+    if (have_start || peak_point(f, step, step->t0, NULL, NULL, v0, s0)) {
+        mem->n_max = peak_maxima(f, step, v0, s0, v1, s1, mem->max_t, mem->max_v);
     }
     memcpy(mem->s1, s1, sizeof(s1));
     memcpy(mem->v1, v1, sizeof(v1));
@@ -214,7 +214,7 @@ static void live_step(csfh_model_t *m, const fmu_step_t *step, csfh_step_peaks_t
 
 /* The part (ta, tb] of the communication step on the live step: a new step (new_step; tb is
  * its end unless a root or the communication point came first) or more of the last one. */
-static void live_part(csfh_model_t *m, const fmu_step_t *step, double ta, double tb)
+static void live_part(csfh_fmu_t *f, const fmu_step_t *step, double ta, double tb)
 {
     csfh_step_peaks_t *mem = (csfh_step_peaks_t *)step->memory;
     if (step->new_step) {
@@ -223,20 +223,20 @@ static void live_part(csfh_model_t *m, const fmu_step_t *step, double ta, double
          * them */
         for (int k = 0; k < mem->n_max; k++) {
             if (mem->max_t[k] > ta && mem->max_t[k] <= tb) {
-                peaks_add(m, mem->max_v[k]);
+                peaks_add(f, mem->max_v[k]);
             }
         }
         if (mem->end_valid && mem->t_end > ta && mem->t_end <= tb) {
-            peaks_add(m, mem->v1);
+            peaks_add(f, mem->v1);
         }
-        live_step(m, step, mem);
+        live_step(f, step, mem);
         if (mem->end_valid && tb == mem->t_end) {
-            peaks_add(m, mem->v1);
+            peaks_add(f, mem->v1);
         }
     }
     for (int k = 0; k < mem->n_max; k++) {
         if (mem->max_t[k] > ta && mem->max_t[k] <= tb) {
-            peaks_add(m, mem->max_v[k]);
+            peaks_add(f, mem->max_v[k]);
         }
     }
 }
@@ -245,14 +245,14 @@ static void live_part(csfh_model_t *m, const fmu_step_t *step, double ta, double
 
 /* The values and slopes at the end (end = 1) or start (0) of a kept step (the model in its
  * discrete state). */
-static void kept_point(csfh_model_t *m, const fmu_step_t *step, int end)
+static void kept_point(csfh_fmu_t *f, const fmu_step_t *step, int end)
 {
     csfh_step_peaks_t *r = (csfh_step_peaks_t *)step->memory;
     if (end) {
-        r->end_valid = peak_point(m, step, step->tn, step->y1, step->f1, r->v1, r->s1);
+        r->end_valid = peak_point(f, step, step->tn, step->y1, step->f1, r->v1, r->s1);
         r->end_done = 1;
     } else {
-        r->start_valid = peak_point(m, step, step->t0, step->y0, step->f0, r->v0, r->s0);
+        r->start_valid = peak_point(f, step, step->t0, step->y0, step->f0, r->v0, r->s0);
         r->start_done = 1;
     }
 }
@@ -260,58 +260,58 @@ static void kept_point(csfh_model_t *m, const fmu_step_t *step, int end)
 /* Analyse a kept step once, in the discrete state it ran with (only that is taken from the
  * step's model: the rest is the live model's): its ends (the start is the previous step's end
  * when it continues that one) and its maxima. */
-static void kept_step(csfh_model_t *m, const fmu_step_t *step)
+static void kept_step(csfh_fmu_t *f, const fmu_step_t *step)
 {
     csfh_step_peaks_t *r = (csfh_step_peaks_t *)step->memory;
     if (r->analysed) {
         return;
     }
-    const csfh_discrete_t live = m->z;
-    m->z = ((const csfh_model_t *)step->model)->z;
+    const csfh_discrete_t live = f->m.z;
+    f->m.z = ((const csfh_fmu_t *)step->model)->m.z;
     if (step->previous != NULL) {
         csfh_step_peaks_t *p = (csfh_step_peaks_t *)step->previous->memory;
         if (!p->end_done) {
-            kept_point(m, step->previous, 1); /* (the same discrete state) */
+            kept_point(f, step->previous, 1); /* (the same discrete state) */
         }
         r->start_valid = p->end_valid;
         memcpy(r->v0, p->v1, sizeof(r->v0));
         memcpy(r->s0, p->s1, sizeof(r->s0));
         r->start_done = 1;
     } else {
-        kept_point(m, step, 0);
+        kept_point(f, step, 0);
     }
-    kept_point(m, step, 1);
+    kept_point(f, step, 1);
     r->n_max = 0;
     if (r->start_valid && r->end_valid) {
-        r->n_max = peak_maxima(m, step, r->v0, r->s0, r->v1, r->s1, r->max_t, r->max_v);
+        r->n_max = peak_maxima(f, step, r->v0, r->s0, r->v1, r->s1, r->max_t, r->max_v);
     }
-    m->z = live;
+    f->m.z = live;
     r->analysed = 1;
 }
 
 /* The peaks of a kept step that lie in (from, to] and before its cut. */
-static void kept_part(csfh_model_t *m, const fmu_step_t *step, double from, double to)
+static void kept_part(csfh_fmu_t *f, const fmu_step_t *step, double from, double to)
 {
-    kept_step(m, step);
+    kept_step(f, step);
     const csfh_step_peaks_t *r = (const csfh_step_peaks_t *)step->memory;
     for (int k = 0; k < r->n_max; k++) {
         if (r->max_t[k] > from && r->max_t[k] <= to && r->max_t[k] <= step->cut) {
-            peaks_add(m, r->max_v[k]);
+            peaks_add(f, r->max_v[k]);
         }
     }
     if (r->end_valid && step->cut == step->tn && step->tn <= to) {
-        peaks_add(m, r->v1);
+        peaks_add(f, r->v1);
     }
 }
 
 void csfh_peaks_analyse_step(void *mv, const fmu_step_t *step, double from, double to)
 {
-    csfh_model_t *m = (csfh_model_t *)mv;
+    csfh_fmu_t *f = (csfh_fmu_t *)mv;
     if (!step->live) {
-        kept_part(m, step, from, to);
+        kept_part(f, step, from, to);
         return;
     }
-    if (!csfh_model_peaks_tracked(m)) {
+    if (!csfh_model_peaks_tracked(&f->m)) {
         /* nothing to track in this discrete state (out of contact): forget the last step */
         csfh_step_peaks_t *mem = (csfh_step_peaks_t *)step->memory;
         mem->end_valid = 0;
@@ -321,5 +321,5 @@ void csfh_peaks_analyse_step(void *mv, const fmu_step_t *step, double from, doub
     if (step->keep != NULL && (!step->new_step || step->keep(step))) {
         return; /* kept (or a part of a kept step): analysed when needed */
     }
-    live_part(m, step, from, to);
+    live_part(f, step, from, to);
 }

@@ -1,5 +1,5 @@
 /* The peak outputs of the csfh FMU in co-simulation (contact.F_N_peak, contact.F_T_peak,
- * contact.indentation_peak, flexure.stress_max_peak; csfh_model.h: csfh_peaks_t): the largest
+ * contact.indentation_peak, flexure.stress_max_peak; csfh_fmu.h: csfh_peaks_t): the largest
  * values over each communication step, located on the integrator's dense output of every step
  * the stepper hands over (fmu_model.h: fmu_step_t). */
 #ifndef CSFH_PEAKS_H
@@ -7,7 +7,7 @@
 
 #include <stddef.h>
 
-#include "csfh_model.h"
+#include "csfh_fmu.h"
 #include "csfh_visibility.h"
 #include "fmu_model.h"
 
