@@ -5,16 +5,17 @@
  * standards: OK, Warning, Discard, Error, Fatal). The model itself is behind the interface of
  * fmu_model.h.
  *
- * fmu_instance.c holds the logging helper, the state machine's check, the model helpers
- * (prepare, outputs, derivatives, event update), the experiment checks, initialization, get and
- * set by value reference through the generated variable table, the communication-step check,
- * model exchange's time-resolution check and the FMU state (snapshot, validation on restore,
- * serialization). */
+ * One file per concern: fmu_log.c (the log, the state machine's check of a call), fmu_instance.c
+ * (life cycle, the model helpers: prepare, outputs, derivatives, event update; the experiment and
+ * initialization), fmu_values.c (get and set through the generated variable table), fmu_state.c
+ * (the FMU state: snapshot, validation on restore, serialization), fmu_me.c (model exchange),
+ * fmu_step.c (the communication step's check). */
 #ifndef CSFH_FMU_INSTANCE_H
 #define CSFH_FMU_INSTANCE_H
 
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "csfh_visibility.h"
 #include "fmu_model.h"
@@ -72,6 +73,9 @@ typedef void (*fmu_logger_t)(const fmu_instance_t *inst, fmu_status_t status,
                              const char *category, const char *message);
 /* Any function pointer (the importer's callback, called only through its own type). */
 typedef void (*fmu_callback_t)(void);
+
+/* The size of every message the instance formats. */
+#define FMU_MSG_SIZE 512
 
 /* Relative tolerance of the co-simulation integrator when the importer defines none (also the
  * DefaultExperiment tolerance of modelDescription.xml). */
@@ -172,8 +176,6 @@ fmu_status_t fmu_set_debug_logging(fmu_instance_t *inst, const char *function, i
 /* ------------------------------------------------------------------------------------------ */
 /* model helpers */
 
-/* Invalidate the output and derivative caches after the state, inputs or time changed. */
-void fmu_invalidate(fmu_instance_t *inst);
 /* Validate the parameters and compute derived quantities once (logged on failure). */
 fmu_status_t fmu_prepare(fmu_instance_t *inst, const char *function);
 fmu_status_t fmu_update_derivatives(fmu_instance_t *inst, const char *function);
@@ -269,6 +271,21 @@ fmu_status_t fmu_state_deserialize(fmu_instance_t *inst, const char *function,
                                    const unsigned char bytes[], size_t size, void **state);
 
 /* ------------------------------------------------------------------------------------------ */
+/* what the instance's files share */
+
+/* Free the FMU states the instance owns (fmu_state.c). */
+void fmu_states_free_all(fmu_instance_t *inst);
+
+/* The relative resolution of a time step below which precision lost to the double time is
+ * reported (fmi2DoStep, fmi2CompletedIntegratorStep): the integration tolerance, but not finer
+ * than one part in a million (a step of 1e-7 s at t = 5 s is resolved to 1e-8 relative, which
+ * no result here notices, and a warning there would be noise). */
+static inline double fmu_time_resolution(const fmu_instance_t *inst)
+{
+    return inst->tolerance > 1e-6 ? inst->tolerance : 1e-6;
+}
+
+/* ------------------------------------------------------------------------------------------ */
 /* the model's time, continuous states and derivative cache */
 
 static inline double *fmu_time(fmu_instance_t *inst)
@@ -282,6 +299,34 @@ static inline double *fmu_states(fmu_instance_t *inst)
 static inline double *fmu_derivatives(fmu_instance_t *inst)
 {
     return (double *)((char *)inst->model + fmu_model.der_offset);
+}
+
+/* Invalidate the output and derivative caches after the state, inputs or time changed. */
+static inline void fmu_invalidate(fmu_instance_t *inst)
+{
+    inst->outputs_valid = 0;
+    inst->derivatives_valid = 0;
+}
+
+/* Bring the model's analysis of the co-simulation steps up to date (the stepper's flush): before
+ * the outputs are computed, values are set or an FMU state is taken. */
+static inline void fmu_flush(fmu_instance_t *inst)
+{
+    if (inst->stepper != NULL) {
+        inst->stepper->flush(inst);
+    }
+}
+
+/* Model exchange: the time and states the next completed integrator step is compared with
+ * (fmu_me.c): set at the end of initialization, at every completed step and when an FMU state
+ * is restored. */
+static inline void fmu_step_reference(fmu_instance_t *inst)
+{
+    inst->last_step_time = *fmu_time(inst);
+    if (fmu_model.n_states > 0) {
+        memcpy(inst->last_step_x, fmu_states(inst), (size_t)fmu_model.n_states * sizeof(double));
+    }
+    inst->last_step_valid = 1;
 }
 
 CSFH_INTERNAL_END
