@@ -35,7 +35,7 @@ typedef enum {
  * instances keep their meaning). */
 typedef enum { FMU_ME = 0, FMU_CS = 1 } fmu_kind_t;
 
-/* Instance states (bit mask, one check per call). FMI 3.0's Step Mode is FMU_STEP_COMPLETE; a
+/* Instance states (bits of the state tables' masks). FMI 3.0's Step Mode is FMU_STEP_COMPLETE; a
  * co-simulation instance of FMI 3.0 with eventModeUsed also enters FMU_EVENT. */
 typedef enum {
     FMU_INSTANTIATED = 1 << 0,
@@ -47,6 +47,14 @@ typedef enum {
     FMU_TERMINATED = 1 << 6,
     FMU_ERROR_STATE = 1 << 7
 } fmu_state_t;
+
+#define FMU_ANY_STATE                                                                          \
+    (FMU_INSTANTIATED | FMU_INITIALIZATION | FMU_EVENT | FMU_CONTINUOUS | FMU_STEP_COMPLETE |  \
+     FMU_STEP_FAILED | FMU_TERMINATED | FMU_ERROR_STATE)
+
+/* The interfaces a function is for, in the masks of the front-ends' state tables (with the
+ * states' bits). */
+enum { FMU_FOR_ME = 1 << 8, FMU_FOR_CS = 1 << 9 };
 
 /* Log categories of modelDescription.xml. */
 enum {
@@ -163,12 +171,13 @@ void fmu_log(const fmu_instance_t *inst, fmu_status_t status, unsigned int categ
 
 const char *fmu_category_name(unsigned int category);
 const char *fmu_state_name(fmu_state_t s);
-/* One state-machine check per call: 1 if the instance is in one of `states` (logs the call under
- * logAll), else 0 (logged; 0 also for a NULL instance). */
-int fmu_allowed(fmu_instance_t *inst, const char *function, unsigned int states);
+/* The one check of a call, at the start of every FMI function (the masks: each front-end's state
+ * table, fmi2/fmi2_states.h, fmi3/fmi3_states.h): 1 if the instance is in one of the mask's
+ * states (the call is logged under logAll) and of one of its interfaces (FMU_FOR_ME,
+ * FMU_FOR_CS), else 0 (logged; 0 also for a NULL instance). The instance's functions below
+ * rely on it: they check their arguments, not the state. */
+int fmu_allowed(fmu_instance_t *inst, const char *function, unsigned int mask);
 int fmu_not_null(fmu_instance_t *inst, const char *function, const void *p, const char *arg);
-int fmu_is_me(fmu_instance_t *inst, const char *function);
-int fmu_is_cs(fmu_instance_t *inst, const char *function);
 /* Debug logging: every category (n == 0) or the named ones on or off. */
 fmu_status_t fmu_set_debug_logging(fmu_instance_t *inst, const char *function, int on, size_t n,
                                    const char *const categories[]);
@@ -213,15 +222,6 @@ typedef enum {
 
 /* Variable types a call accepts: bit (1 << csfh_type_t). */
 #define FMU_ACCEPT(type) (1u << (unsigned int)(type))
-
-#define FMU_GET_STATES                                                                         \
-    (FMU_INITIALIZATION | FMU_EVENT | FMU_CONTINUOUS | FMU_STEP_COMPLETE | FMU_STEP_FAILED |  \
-     FMU_TERMINATED | FMU_ERROR_STATE)
-#define FMU_SET_STATES                                                                         \
-    (FMU_INSTANTIATED | FMU_INITIALIZATION | FMU_EVENT | FMU_CONTINUOUS | FMU_STEP_COMPLETE)
-#define FMU_ANY_STATE                                                                          \
-    (FMU_INSTANTIATED | FMU_INITIALIZATION | FMU_EVENT | FMU_CONTINUOUS | FMU_STEP_COMPLETE |  \
-     FMU_STEP_FAILED | FMU_TERMINATED | FMU_ERROR_STATE)
 
 /* value[i] of vr[i] for variables of the accepted types; the values of `accept`'s types are
  * written as `kind`. */

@@ -56,12 +56,12 @@ const char *fmu_state_name(fmu_state_t s)
     }
 }
 
-int fmu_allowed(fmu_instance_t *inst, const char *function, unsigned int states)
+int fmu_allowed(fmu_instance_t *inst, const char *function, unsigned int mask)
 {
     if (inst == NULL) {
         return 0;
     }
-    if (!(inst->state & states)) {
+    if (!(inst->state & mask)) {
         const char *name = fmu_state_name(inst->state);
         if (inst->fmi_version == 3 && inst->state == FMU_STEP_COMPLETE) {
             name = "StepMode";
@@ -72,6 +72,11 @@ int fmu_allowed(fmu_instance_t *inst, const char *function, unsigned int states)
     if (inst->log_categories & LOG_ALL) { /* (fmu_log is cold: not called on every call) */
         fmu_log(inst, FMU_OK, LOG_ALL, "%s", function);
     }
+    if (!(mask & (inst->type == FMU_ME ? FMU_FOR_ME : FMU_FOR_CS))) {
+        FMU_LOG_ERROR(inst, "%s: only for %s", function,
+                      inst->type == FMU_ME ? "co-simulation" : "model exchange");
+        return 0;
+    }
     return 1;
 }
 
@@ -79,24 +84,6 @@ int fmu_not_null(fmu_instance_t *inst, const char *function, const void *p, cons
 {
     if (p == NULL) {
         FMU_LOG_ERROR(inst, "%s: argument %s is NULL", function, arg);
-        return 0;
-    }
-    return 1;
-}
-
-int fmu_is_me(fmu_instance_t *inst, const char *function)
-{
-    if (inst->type != FMU_ME) {
-        FMU_LOG_ERROR(inst, "%s: only for model exchange", function);
-        return 0;
-    }
-    return 1;
-}
-
-int fmu_is_cs(fmu_instance_t *inst, const char *function)
-{
-    if (inst->type != FMU_CS) {
-        FMU_LOG_ERROR(inst, "%s: only for co-simulation", function);
         return 0;
     }
     return 1;

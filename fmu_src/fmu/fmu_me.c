@@ -43,17 +43,11 @@ static fmu_status_t check_me_time_resolution(fmu_instance_t *inst, const char *f
 
 fmu_status_t fmu_completed_integrator_step(fmu_instance_t *inst, const char *function)
 {
-    if (!fmu_allowed(inst, function, FMU_CONTINUOUS) || !fmu_is_me(inst, function)) {
-        return FMU_ERROR;
-    }
     return check_me_time_resolution(inst, function);
 }
 
 fmu_status_t fmu_set_time(fmu_instance_t *inst, const char *function, double time)
 {
-    if (!fmu_allowed(inst, function, FMU_EVENT | FMU_CONTINUOUS) || !fmu_is_me(inst, function)) {
-        return FMU_ERROR;
-    }
     if (!isfinite(time)) {
         FMU_LOG_ERROR(inst, "%s: time = %g is not finite", function, time);
         return FMU_ERROR;
@@ -66,8 +60,7 @@ fmu_status_t fmu_set_time(fmu_instance_t *inst, const char *function, double tim
 fmu_status_t fmu_set_continuous_states(fmu_instance_t *inst, const char *function,
                                        const double x[], size_t nx)
 {
-    if (!fmu_allowed(inst, function, FMU_CONTINUOUS) || !fmu_is_me(inst, function) ||
-        !fmu_not_null(inst, function, x, "x")) {
+    if (!fmu_not_null(inst, function, x, "x")) {
         return FMU_ERROR;
     }
     if (nx != (size_t)fmu_model.n_states) {
@@ -91,8 +84,7 @@ fmu_status_t fmu_set_continuous_states(fmu_instance_t *inst, const char *functio
 fmu_status_t fmu_get_derivatives(fmu_instance_t *inst, const char *function, double der[],
                                  size_t nx)
 {
-    if (!fmu_allowed(inst, function, FMU_GET_STATES) || !fmu_is_me(inst, function) ||
-        !fmu_not_null(inst, function, der, "derivatives")) {
+    if (!fmu_not_null(inst, function, der, "derivatives")) {
         return FMU_ERROR;
     }
     if (nx != (size_t)fmu_model.n_states) {
@@ -112,8 +104,7 @@ fmu_status_t fmu_get_derivatives(fmu_instance_t *inst, const char *function, dou
 fmu_status_t fmu_get_event_indicators(fmu_instance_t *inst, const char *function, double z[],
                                       size_t ni)
 {
-    if (!fmu_allowed(inst, function, FMU_GET_STATES) || !fmu_is_me(inst, function) ||
-        !fmu_not_null(inst, function, z, "eventIndicators")) {
+    if (!fmu_not_null(inst, function, z, "eventIndicators")) {
         return FMU_ERROR;
     }
     if (ni != (size_t)fmu_model.n_event_indicators) {
@@ -141,8 +132,7 @@ fmu_status_t fmu_get_event_indicators(fmu_instance_t *inst, const char *function
 fmu_status_t fmu_get_continuous_states(fmu_instance_t *inst, const char *function, double x[],
                                        size_t nx)
 {
-    if (!fmu_allowed(inst, function, FMU_GET_STATES) || !fmu_is_me(inst, function) ||
-        !fmu_not_null(inst, function, x, "x")) {
+    if (!fmu_not_null(inst, function, x, "x")) {
         return FMU_ERROR;
     }
     if (nx != (size_t)fmu_model.n_states) {
@@ -158,8 +148,7 @@ fmu_status_t fmu_get_continuous_states(fmu_instance_t *inst, const char *functio
 fmu_status_t fmu_get_nominals(fmu_instance_t *inst, const char *function, double nominal[],
                               size_t nx)
 {
-    if (!fmu_allowed(inst, function, FMU_ANY_STATE) || !fmu_is_me(inst, function) ||
-        !fmu_not_null(inst, function, nominal, "x_nominal")) {
+    if (!fmu_not_null(inst, function, nominal, "x_nominal")) {
         return FMU_ERROR;
     }
     if (nx != (size_t)fmu_model.n_states) {

@@ -183,8 +183,7 @@ static int snapshot_check(fmu_instance_t *inst, const fmu_snapshot_t *s, void *m
 
 fmu_status_t fmu_state_get(fmu_instance_t *inst, const char *function, void **state)
 {
-    if (!fmu_allowed(inst, function, FMU_ANY_STATE) ||
-        !fmu_not_null(inst, function, state, state_arg(inst))) {
+    if (!fmu_not_null(inst, function, state, state_arg(inst))) {
         return FMU_ERROR;
     }
     fmu_snapshot_t *s = (fmu_snapshot_t *)*state;
@@ -211,8 +210,7 @@ fmu_status_t fmu_state_get(fmu_instance_t *inst, const char *function, void **st
 
 fmu_status_t fmu_state_set(fmu_instance_t *inst, const char *function, void *state)
 {
-    if (!fmu_allowed(inst, function, FMU_ANY_STATE) ||
-        !fmu_not_null(inst, function, state, state_arg(inst)) || !state_owned(inst, state, function)) {
+    if (!fmu_not_null(inst, function, state, state_arg(inst)) || !state_owned(inst, state, function)) {
         return FMU_ERROR;
     }
     const fmu_snapshot_t *s = (const fmu_snapshot_t *)state;
@@ -239,9 +237,6 @@ fmu_status_t fmu_state_set(fmu_instance_t *inst, const char *function, void *sta
 
 fmu_status_t fmu_state_free(fmu_instance_t *inst, const char *function, void **state)
 {
-    if (!fmu_allowed(inst, function, FMU_ANY_STATE)) {
-        return FMU_ERROR;
-    }
     if (state == NULL || *state == NULL) {
         return FMU_OK;
     }
@@ -258,8 +253,7 @@ fmu_status_t fmu_state_free(fmu_instance_t *inst, const char *function, void **s
 
 fmu_status_t fmu_state_size(fmu_instance_t *inst, const char *function, void *state, size_t *size)
 {
-    if (!fmu_allowed(inst, function, FMU_ANY_STATE) ||
-        !fmu_not_null(inst, function, state, state_arg(inst)) ||
+    if (!fmu_not_null(inst, function, state, state_arg(inst)) ||
         !fmu_not_null(inst, function, size, "size") || !state_owned(inst, state, function)) {
         return FMU_ERROR;
     }
@@ -270,8 +264,7 @@ fmu_status_t fmu_state_size(fmu_instance_t *inst, const char *function, void *st
 fmu_status_t fmu_state_serialize(fmu_instance_t *inst, const char *function, void *state,
                                  unsigned char bytes[], size_t size)
 {
-    if (!fmu_allowed(inst, function, FMU_ANY_STATE) ||
-        !fmu_not_null(inst, function, state, state_arg(inst)) ||
+    if (!fmu_not_null(inst, function, state, state_arg(inst)) ||
         !fmu_not_null(inst, function, bytes, "serializedState") ||
         !state_owned(inst, state, function)) {
         return FMU_ERROR;
@@ -289,8 +282,7 @@ fmu_status_t fmu_state_serialize(fmu_instance_t *inst, const char *function, voi
 fmu_status_t fmu_state_deserialize(fmu_instance_t *inst, const char *function,
                                    const unsigned char bytes[], size_t size, void **state)
 {
-    if (!fmu_allowed(inst, function, FMU_ANY_STATE) ||
-        !fmu_not_null(inst, function, bytes, "serializedState") ||
+    if (!fmu_not_null(inst, function, bytes, "serializedState") ||
         !fmu_not_null(inst, function, state, state_arg(inst))) {
         return FMU_ERROR;
     }

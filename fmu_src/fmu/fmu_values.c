@@ -51,9 +51,6 @@ static fmu_status_t refresh(fmu_instance_t *inst, unsigned char what, const char
 fmu_status_t fmu_get_values(fmu_instance_t *inst, const char *function, const unsigned int vr[],
                             size_t nvr, unsigned int accept, fmu_value_kind_t kind, void *value)
 {
-    if (!fmu_allowed(inst, function, FMU_GET_STATES)) {
-        return FMU_ERROR;
-    }
     if (nvr > 0 && (!fmu_not_null(inst, function, vr, "vr") || !fmu_not_null(inst, function, value, "value"))) {
         return FMU_ERROR;
     }
@@ -157,9 +154,6 @@ fmu_status_t fmu_set_values(fmu_instance_t *inst, const char *function, const un
                             size_t nvr, unsigned int accept, fmu_value_kind_t kind,
                             const void *value)
 {
-    if (!fmu_allowed(inst, function, FMU_SET_STATES)) {
-        return FMU_ERROR;
-    }
     if (nvr > 0 && (!fmu_not_null(inst, function, vr, "vr") || !fmu_not_null(inst, function, value, "value"))) {
         return FMU_ERROR;
     }

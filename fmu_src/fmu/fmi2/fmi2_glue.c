@@ -11,6 +11,7 @@
 #include "fmi2Functions.h"
 
 #include "cosimulation.h"
+#include "fmi2_states.h"
 #include "fmu_instance.h"
 
 #define MSG_SIZE 512
@@ -53,6 +54,9 @@ const char *fmi2GetVersion(void)
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[])
 {
+    if (!ALLOWED(INST(c), fmi2SetDebugLogging)) {
+        return fmi2Error;
+    }
     return ST(fmu_set_debug_logging(INST(c), "fmi2SetDebugLogging", loggingOn, nCategories,
                                     categories));
 }
@@ -113,7 +117,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
                                fmi2Real stopTime)
 {
     fmu_instance_t *inst = INST(c);
-    if (!fmu_allowed(inst, "fmi2SetupExperiment", FMU_INSTANTIATED)) {
+    if (!ALLOWED(inst, fmi2SetupExperiment)) {
         return fmi2Error;
     }
     return ST(fmu_setup_experiment(inst, "fmi2SetupExperiment", toleranceDefined, tolerance,
@@ -123,7 +127,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
     fmu_instance_t *inst = INST(c);
-    if (!fmu_allowed(inst, "fmi2EnterInitializationMode", FMU_INSTANTIATED)) {
+    if (!ALLOWED(inst, fmi2EnterInitializationMode)) {
         return fmi2Error;
     }
     inst->state = FMU_INITIALIZATION;
@@ -133,7 +137,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     fmu_instance_t *inst = INST(c);
-    if (!fmu_allowed(inst, "fmi2ExitInitializationMode", FMU_INITIALIZATION)) {
+    if (!ALLOWED(inst, fmi2ExitInitializationMode)) {
         return fmi2Error;
     }
     if (fmu_exit_initialization(inst, "fmi2ExitInitializationMode") != FMU_OK) {
@@ -146,8 +150,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 fmi2Status fmi2Terminate(fmi2Component c)
 {
     fmu_instance_t *inst = INST(c);
-    if (!fmu_allowed(inst, "fmi2Terminate",
-                     FMU_EVENT | FMU_CONTINUOUS | FMU_STEP_COMPLETE | FMU_STEP_FAILED)) {
+    if (!ALLOWED(inst, fmi2Terminate)) {
         return fmi2Error;
     }
     inst->state = FMU_TERMINATED;
@@ -157,7 +160,7 @@ fmi2Status fmi2Terminate(fmi2Component c)
 fmi2Status fmi2Reset(fmi2Component c)
 {
     fmu_instance_t *inst = INST(c);
-    if (!fmu_allowed(inst, "fmi2Reset", FMU_ANY_STATE)) {
+    if (!ALLOWED(inst, fmi2Reset)) {
         return fmi2Error;
     }
     fmu_instance_reset(inst);
@@ -174,6 +177,9 @@ fmi2Status fmi2Reset(fmi2Component c)
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[])
 {
+    if (!ALLOWED(INST(c), fmi2GetReal)) {
+        return fmi2Error;
+    }
     return ST(fmu_get_values(INST(c), "fmi2GetReal", vr, nvr, ACCEPT_REAL, FMU_VALUE_DOUBLE,
                              value));
 }
@@ -181,6 +187,9 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Integer value[])
 {
+    if (!ALLOWED(INST(c), fmi2GetInteger)) {
+        return fmi2Error;
+    }
     return ST(fmu_get_values(INST(c), "fmi2GetInteger", vr, nvr, ACCEPT_INTEGER, FMU_VALUE_INT,
                              value));
 }
@@ -188,6 +197,9 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Boolean value[])
 {
+    if (!ALLOWED(INST(c), fmi2GetBoolean)) {
+        return fmi2Error;
+    }
     return ST(fmu_get_values(INST(c), "fmi2GetBoolean", vr, nvr, ACCEPT_BOOLEAN, FMU_VALUE_INT,
                              value));
 }
@@ -197,7 +209,7 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 {
     fmu_instance_t *inst = INST(c);
     (void)value;
-    if (!fmu_allowed(inst, "fmi2GetString", FMU_GET_STATES)) {
+    if (!ALLOWED(inst, fmi2GetString)) {
         return fmi2Error;
     }
     if (nvr > 0) {
@@ -211,6 +223,9 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        const fmi2Real value[])
 {
+    if (!ALLOWED(INST(c), fmi2SetReal)) {
+        return fmi2Error;
+    }
     return ST(fmu_set_values(INST(c), "fmi2SetReal", vr, nvr, ACCEPT_REAL, FMU_VALUE_DOUBLE,
                              value));
 }
@@ -218,6 +233,9 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Integer value[])
 {
+    if (!ALLOWED(INST(c), fmi2SetInteger)) {
+        return fmi2Error;
+    }
     return ST(fmu_set_values(INST(c), "fmi2SetInteger", vr, nvr, ACCEPT_INTEGER, FMU_VALUE_INT,
                              value));
 }
@@ -225,6 +243,9 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Boolean value[])
 {
+    if (!ALLOWED(INST(c), fmi2SetBoolean)) {
+        return fmi2Error;
+    }
     return ST(fmu_set_values(INST(c), "fmi2SetBoolean", vr, nvr, ACCEPT_BOOLEAN, FMU_VALUE_INT,
                              value));
 }
@@ -234,7 +255,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 {
     fmu_instance_t *inst = INST(c);
     (void)value;
-    if (!fmu_allowed(inst, "fmi2SetString", FMU_SET_STATES)) {
+    if (!ALLOWED(inst, fmi2SetString)) {
         return fmi2Error;
     }
     if (nvr > 0) {
@@ -250,27 +271,42 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
+    if (!ALLOWED(INST(c), fmi2GetFMUstate)) {
+        return fmi2Error;
+    }
     return ST(fmu_state_get(INST(c), "fmi2GetFMUstate", FMUstate));
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
+    if (!ALLOWED(INST(c), fmi2SetFMUstate)) {
+        return fmi2Error;
+    }
     return ST(fmu_state_set(INST(c), "fmi2SetFMUstate", FMUstate));
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
+    if (!ALLOWED(INST(c), fmi2FreeFMUstate)) {
+        return fmi2Error;
+    }
     return ST(fmu_state_free(INST(c), "fmi2FreeFMUstate", FMUstate));
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
 {
+    if (!ALLOWED(INST(c), fmi2SerializedFMUstateSize)) {
+        return fmi2Error;
+    }
     return ST(fmu_state_size(INST(c), "fmi2SerializedFMUstateSize", FMUstate, size));
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[],
                                  size_t size)
 {
+    if (!ALLOWED(INST(c), fmi2SerializeFMUstate)) {
+        return fmi2Error;
+    }
     return ST(fmu_state_serialize(INST(c), "fmi2SerializeFMUstate", FMUstate,
                                   (unsigned char *)serializedState, size));
 }
@@ -278,6 +314,9 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate)
 {
+    if (!ALLOWED(INST(c), fmi2DeSerializeFMUstate)) {
+        return fmi2Error;
+    }
     return ST(fmu_state_deserialize(INST(c), "fmi2DeSerializeFMUstate",
                                     (const unsigned char *)serializedState, size, FMUstate));
 }
@@ -294,10 +333,11 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     (void)nKnown;
     (void)dvKnown;
     (void)dvUnknown;
-    if (inst != NULL) {
-        LOG_ERROR(inst, "fmi2GetDirectionalDerivative: not provided "
-                        "(providesDirectionalDerivative = false)");
+    if (!ALLOWED(inst, fmi2GetDirectionalDerivative)) {
+        return fmi2Error;
     }
+    LOG_ERROR(inst, "fmi2GetDirectionalDerivative: not provided "
+              "(providesDirectionalDerivative = false)");
     return fmi2Error;
 }
 
@@ -307,8 +347,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 fmi2Status fmi2EnterEventMode(fmi2Component c)
 {
     fmu_instance_t *inst = INST(c);
-    if (!fmu_allowed(inst, "fmi2EnterEventMode", FMU_EVENT | FMU_CONTINUOUS) ||
-        !fmu_is_me(inst, "fmi2EnterEventMode")) {
+    if (!ALLOWED(inst, fmi2EnterEventMode)) {
         return fmi2Error;
     }
     inst->state = FMU_EVENT;
@@ -318,8 +357,7 @@ fmi2Status fmi2EnterEventMode(fmi2Component c)
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
 {
     fmu_instance_t *inst = INST(c);
-    if (!fmu_allowed(inst, "fmi2NewDiscreteStates", FMU_EVENT) ||
-        !fmu_is_me(inst, "fmi2NewDiscreteStates") ||
+    if (!ALLOWED(inst, fmi2NewDiscreteStates) ||
         !fmu_not_null(inst, "fmi2NewDiscreteStates", eventInfo, "eventInfo")) {
         return fmi2Error;
     }
@@ -347,8 +385,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
 {
     fmu_instance_t *inst = INST(c);
-    if (!fmu_allowed(inst, "fmi2EnterContinuousTimeMode", FMU_EVENT) ||
-        !fmu_is_me(inst, "fmi2EnterContinuousTimeMode")) {
+    if (!ALLOWED(inst, fmi2EnterContinuousTimeMode)) {
         return fmi2Error;
     }
     inst->state = FMU_CONTINUOUS;
@@ -360,7 +397,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 {
     fmu_instance_t *inst = INST(c);
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (inst == NULL ||
+    if (!ALLOWED(inst, fmi2CompletedIntegratorStep) ||
         !fmu_not_null(inst, "fmi2CompletedIntegratorStep", enterEventMode, "enterEventMode") ||
         !fmu_not_null(inst, "fmi2CompletedIntegratorStep", terminateSimulation,
                       "terminateSimulation")) {
@@ -376,31 +413,49 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
 {
+    if (!ALLOWED(INST(c), fmi2SetTime)) {
+        return fmi2Error;
+    }
     return ST(fmu_set_time(INST(c), "fmi2SetTime", time));
 }
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
 {
+    if (!ALLOWED(INST(c), fmi2SetContinuousStates)) {
+        return fmi2Error;
+    }
     return ST(fmu_set_continuous_states(INST(c), "fmi2SetContinuousStates", x, nx));
 }
 
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx)
 {
+    if (!ALLOWED(INST(c), fmi2GetDerivatives)) {
+        return fmi2Error;
+    }
     return ST(fmu_get_derivatives(INST(c), "fmi2GetDerivatives", derivatives, nx));
 }
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni)
 {
+    if (!ALLOWED(INST(c), fmi2GetEventIndicators)) {
+        return fmi2Error;
+    }
     return ST(fmu_get_event_indicators(INST(c), "fmi2GetEventIndicators", eventIndicators, ni));
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
 {
+    if (!ALLOWED(INST(c), fmi2GetContinuousStates)) {
+        return fmi2Error;
+    }
     return ST(fmu_get_continuous_states(INST(c), "fmi2GetContinuousStates", x, nx));
 }
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx)
 {
+    if (!ALLOWED(INST(c), fmi2GetNominalsOfContinuousStates)) {
+        return fmi2Error;
+    }
     return ST(fmu_get_nominals(INST(c), "fmi2GetNominalsOfContinuousStates", x_nominal, nx));
 }
 
@@ -415,10 +470,11 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     (void)nvr;
     (void)order;
     (void)value;
-    if (inst != NULL) {
-        LOG_ERROR(inst, "fmi2SetRealInputDerivatives: not supported (canInterpolateInputs = "
-                        "false; inputs are held over the step)");
+    if (!ALLOWED(inst, fmi2SetRealInputDerivatives)) {
+        return fmi2Error;
     }
+    LOG_ERROR(inst, "fmi2SetRealInputDerivatives: not supported (canInterpolateInputs = "
+              "false; inputs are held over the step)");
     return fmi2Error;
 }
 
@@ -430,9 +486,10 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
     (void)nvr;
     (void)order;
     (void)value;
-    if (inst != NULL) {
-        LOG_ERROR(inst, "fmi2GetRealOutputDerivatives: not supported (maxOutputDerivativeOrder = 0)");
+    if (!ALLOWED(inst, fmi2GetRealOutputDerivatives)) {
+        return fmi2Error;
     }
+    LOG_ERROR(inst, "fmi2GetRealOutputDerivatives: not supported (maxOutputDerivativeOrder = 0)");
     return fmi2Error;
 }
 
@@ -441,7 +498,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
 {
     fmu_instance_t *inst = INST(c);
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (!fmu_allowed(inst, "fmi2DoStep", FMU_STEP_COMPLETE) || !fmu_is_cs(inst, "fmi2DoStep")) {
+    if (!ALLOWED(inst, fmi2DoStep)) {
         return fmi2Error;
     }
     double t_end = 0.0;
@@ -464,18 +521,16 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
     fmu_instance_t *inst = INST(c);
-    if (inst != NULL) {
-        LOG_ERROR(inst, "fmi2CancelStep: not supported (canRunAsynchronuously = false)");
+    if (!ALLOWED(inst, fmi2CancelStep)) {
+        return fmi2Error;
     }
+    LOG_ERROR(inst, "fmi2CancelStep: not supported (canRunAsynchronuously = false)");
     return fmi2Error;
 }
 
-static fmi2Status get_status(fmi2Component c, const char *function)
+/* No asynchronous step: nothing to report. */
+static fmi2Status no_status(fmu_instance_t *inst, const char *function)
 {
-    fmu_instance_t *inst = INST(c);
-    if (inst == NULL) {
-        return fmi2Error; /* like every other function: no instance is an error, not a discard */
-    }
     LOG_ERROR(inst, "%s: no asynchronous step to report on", function);
     return fmi2Discard;
 }
@@ -484,39 +539,54 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *va
 {
     (void)s;
     (void)value;
-    return get_status(c, "fmi2GetStatus");
+    if (!ALLOWED(INST(c), fmi2GetStatus)) {
+        return fmi2Error;
+    }
+    return no_status(INST(c), "fmi2GetStatus");
 }
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
 {
     fmu_instance_t *inst = INST(c);
-    if (inst != NULL && value != NULL && s == fmi2LastSuccessfulTime) {
+    if (!ALLOWED(inst, fmi2GetRealStatus)) {
+        return fmi2Error;
+    }
+    if (value != NULL && s == fmi2LastSuccessfulTime) {
         *value = *fmu_time(inst);
         return fmi2OK;
     }
-    return get_status(c, "fmi2GetRealStatus");
+    return no_status(inst, "fmi2GetRealStatus");
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
 {
     (void)s;
     (void)value;
-    return get_status(c, "fmi2GetIntegerStatus");
+    if (!ALLOWED(INST(c), fmi2GetIntegerStatus)) {
+        return fmi2Error;
+    }
+    return no_status(INST(c), "fmi2GetIntegerStatus");
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
 {
     fmu_instance_t *inst = INST(c);
-    if (inst != NULL && value != NULL && s == fmi2Terminated) {
+    if (!ALLOWED(inst, fmi2GetBooleanStatus)) {
+        return fmi2Error;
+    }
+    if (value != NULL && s == fmi2Terminated) {
         *value = fmi2False;
         return fmi2OK;
     }
-    return get_status(c, "fmi2GetBooleanStatus");
+    return no_status(inst, "fmi2GetBooleanStatus");
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
 {
     (void)s;
     (void)value;
-    return get_status(c, "fmi2GetStringStatus");
+    if (!ALLOWED(INST(c), fmi2GetStringStatus)) {
+        return fmi2Error;
+    }
+    return no_status(INST(c), "fmi2GetStringStatus");
 }

@@ -32,6 +32,7 @@
 #endif
 
 #include "cosimulation.h"
+#include "fmi3_states.h"
 #include "fmu_instance.h"
 
 #define MSG_SIZE 512
@@ -59,6 +60,9 @@ const char *fmi3GetVersion(void)
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
                                const fmi3String categories[])
 {
+    if (!ALLOWED(INST(instance), fmi3SetDebugLogging)) {
+        return fmi3Error;
+    }
     return ST(fmu_set_debug_logging(INST(instance), "fmi3SetDebugLogging", loggingOn,
                                     nCategories, categories));
 }
@@ -171,7 +175,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
                                        fmi3Boolean stopTimeDefined, fmi3Float64 stopTime)
 {
     fmu_instance_t *inst = INST(instance);
-    if (!fmu_allowed(inst, "fmi3EnterInitializationMode", FMU_INSTANTIATED)) {
+    if (!ALLOWED(inst, fmi3EnterInitializationMode)) {
         return fmi3Error;
     }
     if (fmu_setup_experiment(inst, "fmi3EnterInitializationMode", toleranceDefined, tolerance,
@@ -185,7 +189,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 {
     fmu_instance_t *inst = INST(instance);
-    if (!fmu_allowed(inst, "fmi3ExitInitializationMode", FMU_INITIALIZATION)) {
+    if (!ALLOWED(inst, fmi3ExitInitializationMode)) {
         return fmi3Error;
     }
     if (fmu_exit_initialization(inst, "fmi3ExitInitializationMode") != FMU_OK) {
@@ -199,12 +203,7 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 fmi3Status fmi3EnterEventMode(fmi3Instance instance)
 {
     fmu_instance_t *inst = INST(instance);
-    if (inst == NULL) {
-        return fmi3Error;
-    }
-    const unsigned int from = inst->type == FMU_ME ? (FMU_EVENT | FMU_CONTINUOUS)
-                                                   : (FMU_EVENT | FMU_STEP_COMPLETE);
-    if (!fmu_allowed(inst, "fmi3EnterEventMode", from)) {
+    if (!ALLOWED(inst, fmi3EnterEventMode)) {
         return fmi3Error;
     }
     if (inst->type == FMU_CS && !inst->event_mode_used) {
@@ -218,8 +217,7 @@ fmi3Status fmi3EnterEventMode(fmi3Instance instance)
 fmi3Status fmi3Terminate(fmi3Instance instance)
 {
     fmu_instance_t *inst = INST(instance);
-    if (!fmu_allowed(inst, "fmi3Terminate",
-                     FMU_EVENT | FMU_CONTINUOUS | FMU_STEP_COMPLETE | FMU_STEP_FAILED)) {
+    if (!ALLOWED(inst, fmi3Terminate)) {
         return fmi3Error;
     }
     inst->state = FMU_TERMINATED;
@@ -229,7 +227,7 @@ fmi3Status fmi3Terminate(fmi3Instance instance)
 fmi3Status fmi3Reset(fmi3Instance instance)
 {
     fmu_instance_t *inst = INST(instance);
-    if (!fmu_allowed(inst, "fmi3Reset", FMU_ANY_STATE)) {
+    if (!ALLOWED(inst, fmi3Reset)) {
         return fmi3Error;
     }
     fmu_instance_reset(inst);
@@ -241,19 +239,20 @@ fmi3Status fmi3Reset(fmi3Instance instance)
 
 static int counts_match(fmu_instance_t *inst, const char *function, size_t nvr, size_t nValues)
 {
-    if (inst != NULL && nvr != nValues) {
+    if (nvr != nValues) {
         LOG_ERROR(inst, "%s: nValues = %zu, expected nValueReferences = %zu (every variable is a "
                         "scalar)", function, nValues, nvr);
         return 0;
     }
-    return inst != NULL;
+    return 1;
 }
 
 #define GET(name, accept, kind, type)                                                          \
     fmi3Status fmi3Get##name(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,  \
                              type values[], size_t nValues)                                     \
     {                                                                                          \
-        if (!counts_match(INST(instance), "fmi3Get" #name, nvr, nValues)) {                    \
+        if (!ALLOWED(INST(instance), fmi3Get##name) ||                                         \
+            !counts_match(INST(instance), "fmi3Get" #name, nvr, nValues)) {                    \
             return fmi3Error;                                                                  \
         }                                                                                      \
         return ST(fmu_get_values(INST(instance), "fmi3Get" #name, vr, nvr, accept, kind,       \
@@ -263,7 +262,8 @@ static int counts_match(fmu_instance_t *inst, const char *function, size_t nvr, 
     fmi3Status fmi3Set##name(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,  \
                              const type values[], size_t nValues)                               \
     {                                                                                          \
-        if (!counts_match(INST(instance), "fmi3Set" #name, nvr, nValues)) {                    \
+        if (!ALLOWED(INST(instance), fmi3Set##name) ||                                         \
+            !counts_match(INST(instance), "fmi3Set" #name, nvr, nValues)) {                    \
             return fmi3Error;                                                                  \
         }                                                                                      \
         return ST(fmu_set_values(INST(instance), "fmi3Set" #name, vr, nvr, accept, kind,       \
@@ -281,12 +281,9 @@ SET(Boolean, FMU_ACCEPT(CSFH_TYPE_BOOLEAN), FMU_VALUE_BOOL, fmi3Boolean)
 
 /* Types without variables: any value reference is unknown. */
 static fmi3Status no_variables(fmi3Instance instance, const char *function,
-                               const fmi3ValueReference vr[], size_t nvr, unsigned int states)
+                               const fmi3ValueReference vr[], size_t nvr)
 {
     fmu_instance_t *inst = INST(instance);
-    if (!fmu_allowed(inst, function, states)) {
-        return fmi3Error;
-    }
     if (nvr > 0) {
         LOG_ERROR(inst, "%s: unknown value reference %u (the model has no variables of this type)",
                   function, vr != NULL ? vr[0] : 0u);
@@ -301,7 +298,10 @@ static fmi3Status no_variables(fmi3Instance instance, const char *function,
     {                                                                                          \
         (void)values;                                                                          \
         (void)nValues;                                                                         \
-        return no_variables(instance, "fmi3Get" #name, vr, nvr, FMU_GET_STATES);               \
+        if (!ALLOWED(INST(instance), fmi3Get##name)) {                                         \
+            return fmi3Error;                                                                  \
+        }                                                                                      \
+        return no_variables(instance, "fmi3Get" #name, vr, nvr);                               \
     }
 #define SET_NONE(name, type)                                                                   \
     fmi3Status fmi3Set##name(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,  \
@@ -309,7 +309,10 @@ static fmi3Status no_variables(fmi3Instance instance, const char *function,
     {                                                                                          \
         (void)values;                                                                          \
         (void)nValues;                                                                         \
-        return no_variables(instance, "fmi3Set" #name, vr, nvr, FMU_SET_STATES);               \
+        if (!ALLOWED(INST(instance), fmi3Set##name)) {                                         \
+            return fmi3Error;                                                                  \
+        }                                                                                      \
+        return no_variables(instance, "fmi3Set" #name, vr, nvr);                               \
     }
 
 GET_NONE(Float32, fmi3Float32)
@@ -335,7 +338,10 @@ fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], s
     (void)valueSizes;
     (void)values;
     (void)nValues;
-    return no_variables(instance, "fmi3GetBinary", vr, nvr, FMU_GET_STATES);
+    if (!ALLOWED(INST(instance), fmi3GetBinary)) {
+        return fmi3Error;
+    }
+    return no_variables(instance, "fmi3GetBinary", vr, nvr);
 }
 
 fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -344,34 +350,44 @@ fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], s
     (void)valueSizes;
     (void)values;
     (void)nValues;
-    return no_variables(instance, "fmi3SetBinary", vr, nvr, FMU_SET_STATES);
+    if (!ALLOWED(INST(instance), fmi3SetBinary)) {
+        return fmi3Error;
+    }
+    return no_variables(instance, "fmi3SetBinary", vr, nvr);
 }
 
 fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                         fmi3Clock values[])
 {
     (void)values;
-    return no_variables(instance, "fmi3GetClock", vr, nvr, FMU_GET_STATES);
+    if (!ALLOWED(INST(instance), fmi3GetClock)) {
+        return fmi3Error;
+    }
+    return no_variables(instance, "fmi3GetClock", vr, nvr);
 }
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                         const fmi3Clock values[])
 {
     (void)values;
-    return no_variables(instance, "fmi3SetClock", vr, nvr, FMU_SET_STATES);
+    if (!ALLOWED(INST(instance), fmi3SetClock)) {
+        return fmi3Error;
+    }
+    return no_variables(instance, "fmi3SetClock", vr, nvr);
 }
 
 /* ------------------------------------------------------------------------------------------ */
 /* what the FMU does not provide */
 
-static fmi3Status not_provided(fmi3Instance instance, const char *what)
+static fmi3Status not_provided(fmu_instance_t *inst, const char *what)
 {
-    fmu_instance_t *inst = INST(instance);
-    if (inst != NULL) {
-        LOG_ERROR(inst, "%s", what);
-    }
+    LOG_ERROR(inst, "%s", what);
     return fmi3Error;
 }
+
+/* function f, not provided: refused, after its state check (fmi3_states.h) */
+#define NOT_PROVIDED(instance, f, what)                                                        \
+    (ALLOWED(INST(instance), f) ? not_provided(INST(instance), what) : fmi3Error)
 
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance,
                                                fmi3ValueReference valueReference,
@@ -379,7 +395,7 @@ fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance,
 {
     (void)valueReference;
     (void)nDependencies;
-    return not_provided(instance, "fmi3GetNumberOfVariableDependencies: not provided (the "
+    return NOT_PROVIDED(instance, fmi3GetNumberOfVariableDependencies, "fmi3GetNumberOfVariableDependencies: not provided (the "
                                   "dependencies are in modelDescription.xml)");
 }
 
@@ -395,7 +411,7 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
     (void)elementIndicesOfIndependents;
     (void)dependencyKinds;
     (void)nDependencies;
-    return not_provided(instance, "fmi3GetVariableDependencies: not provided (the dependencies "
+    return NOT_PROVIDED(instance, fmi3GetVariableDependencies, "fmi3GetVariableDependencies: not provided (the dependencies "
                                   "are in modelDescription.xml)");
 }
 
@@ -412,7 +428,7 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
     (void)nSeed;
     (void)sensitivity;
     (void)nSensitivity;
-    return not_provided(instance, "fmi3GetDirectionalDerivative: not provided "
+    return NOT_PROVIDED(instance, fmi3GetDirectionalDerivative, "fmi3GetDirectionalDerivative: not provided "
                                   "(providesDirectionalDerivatives = false)");
 }
 
@@ -429,19 +445,19 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
     (void)nSeed;
     (void)sensitivity;
     (void)nSensitivity;
-    return not_provided(instance, "fmi3GetAdjointDerivative: not provided "
+    return NOT_PROVIDED(instance, fmi3GetAdjointDerivative, "fmi3GetAdjointDerivative: not provided "
                                   "(providesAdjointDerivatives = false)");
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
 {
-    return not_provided(instance, "fmi3EnterConfigurationMode: the FMU has no structural "
+    return NOT_PROVIDED(instance, fmi3EnterConfigurationMode, "fmi3EnterConfigurationMode: the FMU has no structural "
                                   "parameters");
 }
 
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
 {
-    return not_provided(instance, "fmi3ExitConfigurationMode: the FMU has no structural "
+    return NOT_PROVIDED(instance, fmi3ExitConfigurationMode, "fmi3ExitConfigurationMode: the FMU has no structural "
                                   "parameters");
 }
 
@@ -454,7 +470,7 @@ fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReferenc
     (void)nvr;
     (void)intervals;
     (void)qualifiers;
-    return not_provided(instance, "fmi3GetIntervalDecimal: " NO_CLOCKS);
+    return NOT_PROVIDED(instance, fmi3GetIntervalDecimal, "fmi3GetIntervalDecimal: " NO_CLOCKS);
 }
 
 fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -466,7 +482,7 @@ fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReferen
     (void)counters;
     (void)resolutions;
     (void)qualifiers;
-    return not_provided(instance, "fmi3GetIntervalFraction: " NO_CLOCKS);
+    return NOT_PROVIDED(instance, fmi3GetIntervalFraction, "fmi3GetIntervalFraction: " NO_CLOCKS);
 }
 
 fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -475,7 +491,7 @@ fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference v
     (void)vr;
     (void)nvr;
     (void)shifts;
-    return not_provided(instance, "fmi3GetShiftDecimal: " NO_CLOCKS);
+    return NOT_PROVIDED(instance, fmi3GetShiftDecimal, "fmi3GetShiftDecimal: " NO_CLOCKS);
 }
 
 fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -485,7 +501,7 @@ fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference 
     (void)nvr;
     (void)counters;
     (void)resolutions;
-    return not_provided(instance, "fmi3GetShiftFraction: " NO_CLOCKS);
+    return NOT_PROVIDED(instance, fmi3GetShiftFraction, "fmi3GetShiftFraction: " NO_CLOCKS);
 }
 
 fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -494,7 +510,7 @@ fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReferenc
     (void)vr;
     (void)nvr;
     (void)intervals;
-    return not_provided(instance, "fmi3SetIntervalDecimal: " NO_CLOCKS);
+    return NOT_PROVIDED(instance, fmi3SetIntervalDecimal, "fmi3SetIntervalDecimal: " NO_CLOCKS);
 }
 
 fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -504,7 +520,7 @@ fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReferen
     (void)nvr;
     (void)counters;
     (void)resolutions;
-    return not_provided(instance, "fmi3SetIntervalFraction: " NO_CLOCKS);
+    return NOT_PROVIDED(instance, fmi3SetIntervalFraction, "fmi3SetIntervalFraction: " NO_CLOCKS);
 }
 
 fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -513,7 +529,7 @@ fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference v
     (void)vr;
     (void)nvr;
     (void)shifts;
-    return not_provided(instance, "fmi3SetShiftDecimal: " NO_CLOCKS);
+    return NOT_PROVIDED(instance, fmi3SetShiftDecimal, "fmi3SetShiftDecimal: " NO_CLOCKS);
 }
 
 fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -523,12 +539,12 @@ fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference 
     (void)nvr;
     (void)counters;
     (void)resolutions;
-    return not_provided(instance, "fmi3SetShiftFraction: " NO_CLOCKS);
+    return NOT_PROVIDED(instance, fmi3SetShiftFraction, "fmi3SetShiftFraction: " NO_CLOCKS);
 }
 
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance)
 {
-    return not_provided(instance, "fmi3EvaluateDiscreteStates: not provided "
+    return NOT_PROVIDED(instance, fmi3EvaluateDiscreteStates, "fmi3EvaluateDiscreteStates: not provided "
                                   "(providesEvaluateDiscreteStates = false)");
 }
 
@@ -537,7 +553,7 @@ fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference 
 {
     (void)clockReference;
     (void)activationTime;
-    return not_provided(instance, "fmi3ActivateModelPartition: the FMU has no Scheduled "
+    return NOT_PROVIDED(instance, fmi3ActivateModelPartition, "fmi3ActivateModelPartition: the FMU has no Scheduled "
                                   "Execution interface");
 }
 
@@ -550,7 +566,7 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
     (void)orders;
     (void)values;
     (void)nValues;
-    return not_provided(instance, "fmi3GetOutputDerivatives: not provided "
+    return NOT_PROVIDED(instance, fmi3GetOutputDerivatives, "fmi3GetOutputDerivatives: not provided "
                                   "(maxOutputDerivativeOrder = 0)");
 }
 
@@ -559,27 +575,42 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
 
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 {
+    if (!ALLOWED(INST(instance), fmi3GetFMUState)) {
+        return fmi3Error;
+    }
     return ST(fmu_state_get(INST(instance), "fmi3GetFMUState", FMUState));
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState)
 {
+    if (!ALLOWED(INST(instance), fmi3SetFMUState)) {
+        return fmi3Error;
+    }
     return ST(fmu_state_set(INST(instance), "fmi3SetFMUState", FMUState));
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 {
+    if (!ALLOWED(INST(instance), fmi3FreeFMUState)) {
+        return fmi3Error;
+    }
     return ST(fmu_state_free(INST(instance), "fmi3FreeFMUState", FMUState));
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size)
 {
+    if (!ALLOWED(INST(instance), fmi3SerializedFMUStateSize)) {
+        return fmi3Error;
+    }
     return ST(fmu_state_size(INST(instance), "fmi3SerializedFMUStateSize", FMUState, size));
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState,
                                  fmi3Byte serializedState[], size_t size)
 {
+    if (!ALLOWED(INST(instance), fmi3SerializeFMUState)) {
+        return fmi3Error;
+    }
     return ST(fmu_state_serialize(INST(instance), "fmi3SerializeFMUState", FMUState,
                                   serializedState, size));
 }
@@ -587,6 +618,9 @@ fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState,
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[],
                                    size_t size, fmi3FMUState *FMUState)
 {
+    if (!ALLOWED(INST(instance), fmi3DeserializeFMUState)) {
+        return fmi3Error;
+    }
     return ST(fmu_state_deserialize(INST(instance), "fmi3DeserializeFMUState", serializedState,
                                     size, FMUState));
 }
@@ -603,7 +637,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 {
     fmu_instance_t *inst = INST(instance);
     const char *f = "fmi3UpdateDiscreteStates";
-    if (!fmu_allowed(inst, f, FMU_EVENT) ||
+    if (!ALLOWED(inst, fmi3UpdateDiscreteStates) ||
         !fmu_not_null(inst, f, discreteStatesNeedUpdate, "discreteStatesNeedUpdate") ||
         !fmu_not_null(inst, f, terminateSimulation, "terminateSimulation") ||
         !fmu_not_null(inst, f, nominalsOfContinuousStatesChanged,
@@ -636,8 +670,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance)
 {
     fmu_instance_t *inst = INST(instance);
-    if (!fmu_allowed(inst, "fmi3EnterContinuousTimeMode", FMU_EVENT) ||
-        !fmu_is_me(inst, "fmi3EnterContinuousTimeMode")) {
+    if (!ALLOWED(inst, fmi3EnterContinuousTimeMode)) {
         return fmi3Error;
     }
     inst->state = FMU_CONTINUOUS;
@@ -650,7 +683,7 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance,
 {
     fmu_instance_t *inst = INST(instance);
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (inst == NULL ||
+    if (!ALLOWED(inst, fmi3CompletedIntegratorStep) ||
         !fmu_not_null(inst, "fmi3CompletedIntegratorStep", enterEventMode, "enterEventMode") ||
         !fmu_not_null(inst, "fmi3CompletedIntegratorStep", terminateSimulation,
                       "terminateSimulation")) {
@@ -666,12 +699,18 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance,
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
 {
+    if (!ALLOWED(INST(instance), fmi3SetTime)) {
+        return fmi3Error;
+    }
     return ST(fmu_set_time(INST(instance), "fmi3SetTime", time));
 }
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],
                                    size_t nContinuousStates)
 {
+    if (!ALLOWED(INST(instance), fmi3SetContinuousStates)) {
+        return fmi3Error;
+    }
     return ST(fmu_set_continuous_states(INST(instance), "fmi3SetContinuousStates",
                                         continuousStates, nContinuousStates));
 }
@@ -679,6 +718,9 @@ fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 cont
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[],
                                              size_t nContinuousStates)
 {
+    if (!ALLOWED(INST(instance), fmi3GetContinuousStateDerivatives)) {
+        return fmi3Error;
+    }
     return ST(fmu_get_derivatives(INST(instance), "fmi3GetContinuousStateDerivatives",
                                   derivatives, nContinuousStates));
 }
@@ -686,6 +728,9 @@ fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 
 fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[],
                                   size_t nEventIndicators)
 {
+    if (!ALLOWED(INST(instance), fmi3GetEventIndicators)) {
+        return fmi3Error;
+    }
     return ST(fmu_get_event_indicators(INST(instance), "fmi3GetEventIndicators", eventIndicators,
                                        nEventIndicators));
 }
@@ -693,6 +738,9 @@ fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndica
 fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[],
                                    size_t nContinuousStates)
 {
+    if (!ALLOWED(INST(instance), fmi3GetContinuousStates)) {
+        return fmi3Error;
+    }
     return ST(fmu_get_continuous_states(INST(instance), "fmi3GetContinuousStates",
                                         continuousStates, nContinuousStates));
 }
@@ -700,6 +748,9 @@ fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuous
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[],
                                              size_t nContinuousStates)
 {
+    if (!ALLOWED(INST(instance), fmi3GetNominalsOfContinuousStates)) {
+        return fmi3Error;
+    }
     return ST(fmu_get_nominals(INST(instance), "fmi3GetNominalsOfContinuousStates", nominals,
                                nContinuousStates));
 }
@@ -707,7 +758,7 @@ fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators)
 {
     fmu_instance_t *inst = INST(instance);
-    if (!fmu_allowed(inst, "fmi3GetNumberOfEventIndicators", FMU_ANY_STATE) ||
+    if (!ALLOWED(inst, fmi3GetNumberOfEventIndicators) ||
         !fmu_not_null(inst, "fmi3GetNumberOfEventIndicators", nEventIndicators,
                       "nEventIndicators")) {
         return fmi3Error;
@@ -719,7 +770,7 @@ fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventI
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates)
 {
     fmu_instance_t *inst = INST(instance);
-    if (!fmu_allowed(inst, "fmi3GetNumberOfContinuousStates", FMU_ANY_STATE) ||
+    if (!ALLOWED(inst, fmi3GetNumberOfContinuousStates) ||
         !fmu_not_null(inst, "fmi3GetNumberOfContinuousStates", nContinuousStates,
                       "nContinuousStates")) {
         return fmi3Error;
@@ -734,8 +785,7 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nConti
 fmi3Status fmi3EnterStepMode(fmi3Instance instance)
 {
     fmu_instance_t *inst = INST(instance);
-    if (!fmu_allowed(inst, "fmi3EnterStepMode", FMU_EVENT) ||
-        !fmu_is_cs(inst, "fmi3EnterStepMode")) {
+    if (!ALLOWED(inst, fmi3EnterStepMode)) {
         return fmi3Error;
     }
     inst->state = FMU_STEP_COMPLETE;
@@ -751,7 +801,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     fmu_instance_t *inst = INST(instance);
     const char *f = "fmi3DoStep";
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (!fmu_allowed(inst, f, FMU_STEP_COMPLETE) || !fmu_is_cs(inst, f) ||
+    if (!ALLOWED(inst, fmi3DoStep) ||
         !fmu_not_null(inst, f, eventHandlingNeeded, "eventHandlingNeeded") ||
         !fmu_not_null(inst, f, terminateSimulation, "terminateSimulation") ||
         !fmu_not_null(inst, f, earlyReturn, "earlyReturn") ||
