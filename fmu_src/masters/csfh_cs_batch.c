@@ -7,58 +7,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fmi2FunctionTypes.h"
+#include "fmi2_api.h"
+#include "fmu_library.h"
 
 #define ABI_VERSION 2 /* 2: csfh_cs_steps */
 #define MAX_OUT 64 /* outputs per run */
-
-/* ------------------------------------------------------------------------------------------ */
-/* the shared-library shim: the only platform-specific code */
-#if defined(_WIN32)
-#include <windows.h>
-static void *library_open(const char *path)
-{
-    return (void *)LoadLibraryA(path);
-}
-static void *library_symbol(void *library, const char *name)
-{
-    return (void *)GetProcAddress((HMODULE)library, name);
-}
-static void library_close(void *library)
-{
-    FreeLibrary((HMODULE)library);
-}
-#else
-#include <dlfcn.h>
-static void *library_open(const char *path)
-{
-    return dlopen(path, RTLD_NOW | RTLD_LOCAL);
-}
-static void *library_symbol(void *library, const char *name)
-{
-    return dlsym(library, name);
-}
-static void library_close(void *library)
-{
-    dlclose(library);
-}
-#endif
-
-typedef struct {
-    fmi2InstantiateTYPE *Instantiate;
-    fmi2FreeInstanceTYPE *FreeInstance;
-    fmi2SetupExperimentTYPE *SetupExperiment;
-    fmi2EnterInitializationModeTYPE *EnterInitializationMode;
-    fmi2ExitInitializationModeTYPE *ExitInitializationMode;
-    fmi2TerminateTYPE *Terminate;
-    fmi2SetRealTYPE *SetReal;
-    fmi2SetIntegerTYPE *SetInteger;
-    fmi2SetBooleanTYPE *SetBoolean;
-    fmi2GetRealTYPE *GetReal;
-    fmi2GetIntegerTYPE *GetInteger;
-    fmi2GetBooleanTYPE *GetBoolean;
-    fmi2DoStepTYPE *DoStep;
-} api_t;
 
 /* ------------------------------------------------------------------------------------------ */
 /* one run's context: the FMU's log goes here (the first error, else the first warning) */
@@ -161,7 +114,7 @@ static void group_outputs(const csfh_cs_batch_spec_t *spec, out_groups_t *g)
 }
 
 /* Read every output (converted to double). */
-static fmi2Status read_outputs(const api_t *api, fmi2Component c, const out_groups_t *g,
+static fmi2Status read_outputs(const fmi2_api_t *api, fmi2Component c, const out_groups_t *g,
                                double *v, run_log_t *log)
 {
     double reals[MAX_OUT];
@@ -206,7 +159,7 @@ long long csfh_cs_batch_points(double stop_time, double step)
 }
 
 /* One run; returns its status. */
-static int run_one(const api_t *api, const csfh_cs_batch_spec_t *spec, const out_groups_t *groups,
+static int run_one(const fmi2_api_t *api, const csfh_cs_batch_spec_t *spec, const out_groups_t *groups,
                    const double *values, long long n_steps, double *result, double *record,
                    run_log_t *log)
 {
@@ -319,39 +272,17 @@ long long csfh_cs_batch_run(const csfh_cs_batch_spec_t *spec, size_t n_runs, con
                  spec->stop_time, spec->step, spec->tolerance);
         return -1;
     }
-    void *library = library_open(spec->binary);
+    void *library = fmu_library_open(spec->binary);
     if (library == NULL) {
         snprintf(first, first_size, "csfh_cs_batch_run: cannot load %s", spec->binary);
         return -1;
     }
-    api_t api;
-    struct {
-        const char *name;
-        void **slot;
-    } symbols[] = {
-        {"fmi2Instantiate", (void **)&api.Instantiate},
-        {"fmi2FreeInstance", (void **)&api.FreeInstance},
-        {"fmi2SetupExperiment", (void **)&api.SetupExperiment},
-        {"fmi2EnterInitializationMode", (void **)&api.EnterInitializationMode},
-        {"fmi2ExitInitializationMode", (void **)&api.ExitInitializationMode},
-        {"fmi2Terminate", (void **)&api.Terminate},
-        {"fmi2SetReal", (void **)&api.SetReal},
-        {"fmi2SetInteger", (void **)&api.SetInteger},
-        {"fmi2SetBoolean", (void **)&api.SetBoolean},
-        {"fmi2GetReal", (void **)&api.GetReal},
-        {"fmi2GetInteger", (void **)&api.GetInteger},
-        {"fmi2GetBoolean", (void **)&api.GetBoolean},
-        {"fmi2DoStep", (void **)&api.DoStep},
-    };
-    for (size_t i = 0; i < sizeof(symbols) / sizeof(symbols[0]); i++) {
-        void *p = library_symbol(library, symbols[i].name);
-        if (p == NULL) {
-            snprintf(first, first_size, "csfh_cs_batch_run: %s has no %s", spec->binary,
-                     symbols[i].name);
-            library_close(library);
-            return -1;
-        }
-        memcpy(symbols[i].slot, &p, sizeof(p)); /* object to function pointer, as dlsym wants */
+    fmi2_api_t api;
+    const char *missing = fmi2_api_load(&api, library, FMI2_API_COMMON | FMI2_API_CS);
+    if (missing != NULL) {
+        snprintf(first, first_size, "csfh_cs_batch_run: %s has no %s", spec->binary, missing);
+        fmu_library_close(library);
+        return -1;
     }
     out_groups_t groups;
     group_outputs(spec, &groups);
@@ -372,7 +303,7 @@ long long csfh_cs_batch_run(const csfh_cs_batch_spec_t *spec, size_t n_runs, con
             failed++;
         }
     }
-    library_close(library);
+    fmu_library_close(library);
     return failed;
 }
 

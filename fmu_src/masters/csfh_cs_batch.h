@@ -11,8 +11,8 @@
  * of Python (fmpy's wrappers, one ctypes call per value and per step), which for a run of the
  * csfh scene is several times the FMU's own work.
  *
- * Plain C11 and the FMI 2.0 headers; the one platform-specific part is the dlopen shim
- * (POSIX; LoadLibrary on Windows). Used from Python through ctypes (csfh.runners.cs_batch). */
+ * Plain C11 and the FMI 2.0 headers; the binary is loaded through the masters' shared loader
+ * (fmu_library.h, fmi2_api.h). Used from Python through ctypes (csfh.runners.cs_batch). */
 #ifndef CSFH_CS_BATCH_H
 #define CSFH_CS_BATCH_H
 
