@@ -39,6 +39,8 @@ CSFH_SOURCES = {
     "kept_steps.c",
     "auto_policy.c",
     "rk45.c",
+    "rk45_dense.c",
+    "rk45_roots.c",
     "csfh_fmu_model.c",
     "csfh_fmu.c",
     "csfh_peaks.c",
