@@ -56,6 +56,59 @@ static int solve_contact(const double G[2][2], const double c[2], double mu_stic
     return fd == 0.0 ? CSFH_MOREAU_SLIP : CSFH_MOREAU_FALLBACK;
 }
 
+/* Steps 4-6 at a contact (the midpoint qM within g_tol of it): the local problem on the normal
+ * and tangential velocities from the free velocity u_free, and the velocity uE after the
+ * impulses. */
+static void contact_impulses(csfh_model_t *m, const csfh_moreau_options_t *o,
+                             csfh_moreau_memory_t *mem, const double qM[3], const double u[3],
+                             const double u_free[3], const double Minv[3], double uE[3],
+                             csfh_moreau_step_t *info)
+{
+    csfh_count(&m->counters.contact);
+    csfh_contact_kin_t kin;
+    csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, qM, &kin);
+    const double *D[2] = {kin.DN, kin.DT};
+    double G[2][2];
+    for (int a = 0; a < 2; a++) {
+        for (int b = 0; b < 2; b++) {
+            G[a][b] = D[a][0] * Minv[0] * D[b][0] + D[a][1] * Minv[1] * D[b][1] +
+                      D[a][2] * Minv[2] * D[b][2];
+        }
+    }
+    double gamma_free[2];
+    for (int a = 0; a < 2; a++) {
+        info->gamma_A[a] = D[a][0] * u[0] + D[a][1] * u[1] + D[a][2] * u[2];
+        gamma_free[a] = D[a][0] * u_free[0] + D[a][1] * u_free[1] + D[a][2] * u_free[2];
+    }
+    /* restitution only for a closing contact (6.1 step 4, 6.3) */
+    info->restitution = info->gamma_A[0] < -o->v_eps;
+    const double eps = info->restitution ? m->p.cr : 0.0;
+    const double c[2] = {gamma_free[0] + eps * info->gamma_A[0], gamma_free[1]};
+    if (m->p.friction_enabled) {
+        csfh_count(&m->counters.friction);
+    }
+    const double fd = m->p.friction_enabled ? m->p.fd : 0.0;
+    const double fa = m->p.friction_enabled ? m->p.fa : 0.0;
+    double mu_stick = fa; /* paper-literal: f_a decides (6.4) */
+    if (o->stick_rule == CSFH_STICK_MEMORY) {
+        const int was_stuck = mem->sticking || fabs(info->gamma_A[1]) <= o->v_stick;
+        mu_stick = was_stuck ? fa : fd;
+    }
+    double Lambda[2];
+    info->mode = solve_contact(G, c, mu_stick, fd, Lambda);
+    info->Lambda_N = Lambda[0];
+    info->Lambda_T = Lambda[1];
+    /* 6. velocity update */
+    for (int i = 0; i < 3; i++) {
+        uE[i] = u_free[i] + Minv[i] * (D[0][i] * Lambda[0] + D[1][i] * Lambda[1]);
+    }
+    for (int a = 0; a < 2; a++) {
+        info->gamma_E[a] = D[a][0] * uE[0] + D[a][1] * uE[1] + D[a][2] * uE[2];
+    }
+    mem->sticking = info->mode == CSFH_MOREAU_STICK;
+    mem->active = 1;
+}
+
 int csfh_moreau_step(csfh_model_t *m, const csfh_moreau_options_t *o, csfh_moreau_memory_t *mem,
                      double q[3], double u[3], csfh_moreau_step_t *info)
 {
@@ -83,50 +136,7 @@ int csfh_moreau_step(csfh_model_t *m, const csfh_moreau_options_t *o, csfh_morea
         mem->sticking = 0;
         mem->active = 0;
     } else {
-        /* 4. the local problem */
-        csfh_count(&m->counters.contact);
-        csfh_contact_kin_t kin;
-        csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, qM, &kin);
-        const double *D[2] = {kin.DN, kin.DT};
-        double G[2][2];
-        for (int a = 0; a < 2; a++) {
-            for (int b = 0; b < 2; b++) {
-                G[a][b] = D[a][0] * Minv[0] * D[b][0] + D[a][1] * Minv[1] * D[b][1] +
-                          D[a][2] * Minv[2] * D[b][2];
-            }
-        }
-        double gamma_free[2];
-        for (int a = 0; a < 2; a++) {
-            info->gamma_A[a] = D[a][0] * u[0] + D[a][1] * u[1] + D[a][2] * u[2];
-            gamma_free[a] = D[a][0] * u_free[0] + D[a][1] * u_free[1] + D[a][2] * u_free[2];
-        }
-        /* restitution only for a closing contact (6.1 step 4, 6.3) */
-        info->restitution = info->gamma_A[0] < -o->v_eps;
-        const double eps = info->restitution ? m->p.cr : 0.0;
-        const double c[2] = {gamma_free[0] + eps * info->gamma_A[0], gamma_free[1]};
-        if (m->p.friction_enabled) {
-            csfh_count(&m->counters.friction);
-        }
-        const double fd = m->p.friction_enabled ? m->p.fd : 0.0;
-        const double fa = m->p.friction_enabled ? m->p.fa : 0.0;
-        double mu_stick = fa; /* paper-literal: f_a decides (6.4) */
-        if (o->stick_rule == CSFH_STICK_MEMORY) {
-            const int was_stuck = mem->sticking || fabs(info->gamma_A[1]) <= o->v_stick;
-            mu_stick = was_stuck ? fa : fd;
-        }
-        double Lambda[2];
-        info->mode = solve_contact(G, c, mu_stick, fd, Lambda);
-        info->Lambda_N = Lambda[0];
-        info->Lambda_T = Lambda[1];
-        /* 6. velocity update */
-        for (int i = 0; i < 3; i++) {
-            uE[i] = u_free[i] + Minv[i] * (D[0][i] * Lambda[0] + D[1][i] * Lambda[1]);
-        }
-        for (int a = 0; a < 2; a++) {
-            info->gamma_E[a] = D[a][0] * uE[0] + D[a][1] * uE[1] + D[a][2] * uE[2];
-        }
-        mem->sticking = info->mode == CSFH_MOREAU_STICK;
-        mem->active = 1;
+        contact_impulses(m, o, mem, qM, u, u_free, Minv, uE, info); /* 4.-6. */
     }
     /* 7. second half drift */
     for (int i = 0; i < 3; i++) {
@@ -173,6 +183,54 @@ static void write_record(csfh_model_t *m, double t, const double q[3], const dou
     row[CSFH_MR_ENERGY] = energy(m, q, u);
 }
 
+/* The step's counts: its mode, and at an onset (a contact after a step without) its impact
+ * record at t (u: the velocity after it). */
+static void count_step(csfh_moreau_stats_t *stats, const csfh_moreau_step_t *info, int was_active,
+                       double t, const double u[3], double *impacts, size_t max_impacts)
+{
+    if (info->mode == CSFH_MOREAU_FREE) {
+        return;
+    }
+    stats->active_steps++;
+    stats->stick_steps += info->mode == CSFH_MOREAU_STICK;
+    stats->slip_steps += info->mode == CSFH_MOREAU_SLIP;
+    stats->fallback_steps += info->mode == CSFH_MOREAU_FALLBACK;
+    if (was_active) {
+        return;
+    }
+    stats->onsets++;
+    if (impacts == NULL || stats->impacts >= max_impacts) {
+        stats->impacts_dropped++;
+        return;
+    }
+    double *row = impacts + stats->impacts * CSFH_MI_NCOLS;
+    row[CSFH_MI_T] = t;
+    row[CSFH_MI_GAMMA_N_A] = info->gamma_A[0];
+    row[CSFH_MI_GAMMA_T_A] = info->gamma_A[1];
+    row[CSFH_MI_GAMMA_N_E] = info->gamma_E[0];
+    row[CSFH_MI_GAMMA_T_E] = info->gamma_E[1];
+    row[CSFH_MI_LAMBDA_N] = info->Lambda_N;
+    row[CSFH_MI_LAMBDA_T] = info->Lambda_T;
+    row[CSFH_MI_MODE] = info->mode;
+    row[CSFH_MI_RESTITUTION] = info->restitution;
+    row[CSFH_MI_OMEGA_E] = u[2];
+    stats->impacts++;
+}
+
+/* The step's impulses into what the next record reports: the peak F_N with its F_T and mode,
+ * the sums of the impulses. */
+static void accumulate(double acc[5], const csfh_moreau_step_t *info, double h)
+{
+    const double F_N = info->Lambda_N / h;
+    if (F_N > acc[0] || (acc[0] == 0.0 && info->mode != CSFH_MOREAU_FREE && acc[4] == 0.0)) {
+        acc[0] = F_N;
+        acc[1] = info->Lambda_T / h;
+        acc[4] = info->mode;
+    }
+    acc[2] += info->Lambda_N;
+    acc[3] += info->Lambda_T;
+}
+
 int csfh_moreau_run(csfh_model_t *m, const csfh_moreau_options_t *o, double t0, const double x0[6],
                     long long n_steps, long long record_every, double *records, size_t max_records,
                     double *impacts, size_t max_impacts, double x_end[6],
@@ -198,39 +256,8 @@ int csfh_moreau_run(csfh_model_t *m, const csfh_moreau_options_t *o, double t0, 
         m->time = t; /* the step's start (the shock pulse is evaluated at its midpoint) */
         status = csfh_moreau_step(m, o, &mem, q, u, &info);
         stats->steps++;
-        if (info.mode != CSFH_MOREAU_FREE) {
-            stats->active_steps++;
-            stats->stick_steps += info.mode == CSFH_MOREAU_STICK;
-            stats->slip_steps += info.mode == CSFH_MOREAU_SLIP;
-            stats->fallback_steps += info.mode == CSFH_MOREAU_FALLBACK;
-            if (!was_active) {
-                stats->onsets++;
-                if (impacts != NULL && stats->impacts < max_impacts) {
-                    double *row = impacts + stats->impacts * CSFH_MI_NCOLS;
-                    row[CSFH_MI_T] = t;
-                    row[CSFH_MI_GAMMA_N_A] = info.gamma_A[0];
-                    row[CSFH_MI_GAMMA_T_A] = info.gamma_A[1];
-                    row[CSFH_MI_GAMMA_N_E] = info.gamma_E[0];
-                    row[CSFH_MI_GAMMA_T_E] = info.gamma_E[1];
-                    row[CSFH_MI_LAMBDA_N] = info.Lambda_N;
-                    row[CSFH_MI_LAMBDA_T] = info.Lambda_T;
-                    row[CSFH_MI_MODE] = info.mode;
-                    row[CSFH_MI_RESTITUTION] = info.restitution;
-                    row[CSFH_MI_OMEGA_E] = u[2];
-                    stats->impacts++;
-                } else {
-                    stats->impacts_dropped++;
-                }
-            }
-        }
-        const double F_N = info.Lambda_N / o->h;
-        if (F_N > acc[0] || (acc[0] == 0.0 && info.mode != CSFH_MOREAU_FREE && acc[4] == 0.0)) {
-            acc[0] = F_N;
-            acc[1] = info.Lambda_T / o->h;
-            acc[4] = info.mode;
-        }
-        acc[2] += info.Lambda_N;
-        acc[3] += info.Lambda_T;
+        count_step(stats, &info, was_active, t, u, impacts, max_impacts);
+        accumulate(acc, &info, o->h);
         if (status != CSFH_OK) {
             k++;
             break;

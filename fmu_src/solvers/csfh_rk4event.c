@@ -49,6 +49,85 @@ static void write_record(csfh_model_t *m, double t, const double x[6], double *r
     row[12] = out.E_total;
 }
 
+/* Where the contacts of a run go (CSFH_CR_NCOLS values each), and the one being filled. */
+typedef struct {
+    double *rows;
+    size_t max;
+    double *current; /* NULL: none, or no room for it */
+} contacts_t;
+
+/* A new contact record at t with the onset rate: its row, or NULL when there is no room. */
+static double *contact_begins(contacts_t *c, csfh_rk4_stats_t *stats, double t,
+                              double onset_speed)
+{
+    if (c->rows == NULL || stats->contacts >= c->max) {
+        return NULL;
+    }
+    double *row = c->rows + stats->contacts * CSFH_CR_NCOLS;
+    row[CSFH_CR_T_ONSET] = t;
+    row[CSFH_CR_ONSET_SPEED] = onset_speed;
+    row[CSFH_CR_T_RELEASE] = row[CSFH_CR_RELEASE_SPEED] = NAN;
+    row[CSFH_CR_PEAK_F_N] = row[CSFH_CR_MAX_INDENTATION] = 0.0;
+    stats->contacts++;
+    return row;
+}
+
+/* The contact mode after an accepted step to (t, x) with the gap there: the onset (its
+ * indentation rate captured) where the gap has closed, the release where it has opened (back
+ * to the nominal step, *h = h0); in contact, the record's peak force and indentation. */
+static void contact_events(csfh_model_t *m, const csfh_rk4_options_t *o, contacts_t *c,
+                           csfh_rk4_stats_t *stats, double gap, double t, const double x[6],
+                           double *h)
+{
+    if (m->p.law != CSFH_CONTACTLAW_NONE && !m->z.in_contact && gap <= 0.0) {
+        csfh_model_event_update(m); /* onset: the indentation rate is captured */
+        c->current = contact_begins(c, stats, t, m->z.onset_speed);
+    } else if (m->z.in_contact && gap > 0.0) {
+        m->z.in_contact = 0; /* release; back to the nominal step */
+        *h = o->h0;
+        if (c->current != NULL) {
+            csfh_contact_kin_t kin;
+            csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, x, &kin);
+            c->current[CSFH_CR_T_RELEASE] = t;
+            c->current[CSFH_CR_RELEASE_SPEED] =
+                kin.DN[0] * x[3] + kin.DN[1] * x[4] + kin.DN[2] * x[5];
+            c->current = NULL;
+        }
+        m->z.release_time = t;
+    }
+    if (m->z.in_contact && c->current != NULL) {
+        csfh_contact_eval_t e;
+        csfh_model_contact_by_gap(m, x, x + 3, &e);
+        c->current[CSFH_CR_PEAK_F_N] = fmax(c->current[CSFH_CR_PEAK_F_N], e.F_N);
+        c->current[CSFH_CR_MAX_INDENTATION] = fmax(c->current[CSFH_CR_MAX_INDENTATION], e.rho);
+    }
+}
+
+/* The output times t0 + k dt_out and where their records go. */
+typedef struct {
+    double t0, dt_out, next;
+    long long k;
+    double *rows;
+    size_t max;
+} outputs_t;
+
+/* A record at the first accepted step at or after each output time (the scheme has no dense
+ * output). */
+static void output_if_due(csfh_model_t *m, outputs_t *out, csfh_rk4_stats_t *stats, double t,
+                          const double x[6])
+{
+    if (!(t >= out->next - 1e-12 * fabs(out->next))) {
+        return;
+    }
+    if (out->rows != NULL && stats->records < out->max) {
+        write_record(m, t, x, out->rows + stats->records * CSFH_RK4_RECORD_NCOLS);
+        stats->records++;
+    }
+    while (out->next <= t + 1e-12 * fabs(t)) {
+        out->next = out->t0 + (double)(++out->k) * out->dt_out;
+    }
+}
+
 int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
                        const double x0[6], double t_end, double dt_out, double *records,
                        size_t max_records, double *contacts, size_t max_contacts, double x_end[6],
@@ -61,21 +140,16 @@ int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
     memcpy(m->x, x0, sizeof(x));
     m->time = t0;
     csfh_model_init_discrete(m);
-    double *current = NULL; /* the contact record being filled */
-    if (m->z.in_contact && contacts != NULL && max_contacts > 0) {
-        current = contacts;
-        current[CSFH_CR_T_ONSET] = t0;
-        current[CSFH_CR_ONSET_SPEED] = m->z.onset_speed;
-        current[CSFH_CR_T_RELEASE] = current[CSFH_CR_RELEASE_SPEED] = NAN;
-        current[CSFH_CR_PEAK_F_N] = current[CSFH_CR_MAX_INDENTATION] = 0.0;
-        stats->contacts = 1;
+    contacts_t c = {contacts, max_contacts, NULL};
+    if (m->z.in_contact) {
+        c.current = contact_begins(&c, stats, t0, m->z.onset_speed);
     }
     if (records != NULL && max_records > 0) {
         write_record(m, t0, x, records);
         stats->records = 1;
     }
-    double t = t0, h = o->h0, next_out = t0 + dt_out;
-    long long k_out = 1;
+    outputs_t out = {t0, dt_out, t0 + dt_out, 1, records, max_records};
+    double t = t0, h = o->h0;
     int status = CSFH_OK;
     while (t < t_end - 1e-12 * fabs(t_end)) {
         const double h_try = fmin(h, t_end - t);
@@ -84,8 +158,8 @@ int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
             break;
         }
         const double gap = csfh_contact_gap(m->d.delta, m->p.s1bar, xn);
-        const int contact_law = m->p.law != CSFH_CONTACTLAW_NONE;
-        if (contact_law && !m->z.in_contact && gap < -o->tol && h_try > o->h_min) {
+        if (m->p.law != CSFH_CONTACTLAW_NONE && !m->z.in_contact && gap < -o->tol &&
+            h_try > o->h_min) {
             h = 0.5 * h_try; /* bisection toward the event (paper, Fig. 3) */
             stats->rejected_steps++;
             continue;
@@ -95,46 +169,8 @@ int csfh_rk4_event_run(csfh_model_t *m, const csfh_rk4_options_t *o, double t0,
         memcpy(m->x, x, sizeof(x));
         m->time = t;
         stats->steps++;
-        if (contact_law && !m->z.in_contact && gap <= 0.0) {
-            csfh_model_event_update(m); /* onset: the indentation rate is captured */
-            if (contacts != NULL && stats->contacts < max_contacts) {
-                current = contacts + stats->contacts * CSFH_CR_NCOLS;
-                current[CSFH_CR_T_ONSET] = t;
-                current[CSFH_CR_ONSET_SPEED] = m->z.onset_speed;
-                current[CSFH_CR_T_RELEASE] = current[CSFH_CR_RELEASE_SPEED] = NAN;
-                current[CSFH_CR_PEAK_F_N] = current[CSFH_CR_MAX_INDENTATION] = 0.0;
-                stats->contacts++;
-            } else {
-                current = NULL;
-            }
-        } else if (m->z.in_contact && gap > 0.0) {
-            m->z.in_contact = 0; /* release; back to the nominal step */
-            h = o->h0;
-            if (current != NULL) {
-                csfh_contact_kin_t kin;
-                csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, x, &kin);
-                current[CSFH_CR_T_RELEASE] = t;
-                current[CSFH_CR_RELEASE_SPEED] =
-                    kin.DN[0] * x[3] + kin.DN[1] * x[4] + kin.DN[2] * x[5];
-                current = NULL;
-            }
-            m->z.release_time = t;
-        }
-        if (m->z.in_contact && current != NULL) {
-            csfh_contact_eval_t c;
-            csfh_model_contact_by_gap(m, x, x + 3, &c);
-            current[CSFH_CR_PEAK_F_N] = fmax(current[CSFH_CR_PEAK_F_N], c.F_N);
-            current[CSFH_CR_MAX_INDENTATION] = fmax(current[CSFH_CR_MAX_INDENTATION], c.rho);
-        }
-        if (t >= next_out - 1e-12 * fabs(next_out)) {
-            if (records != NULL && stats->records < max_records) {
-                write_record(m, t, x, records + stats->records * CSFH_RK4_RECORD_NCOLS);
-                stats->records++;
-            }
-            while (next_out <= t + 1e-12 * fabs(t)) {
-                next_out = t0 + (double)(++k_out) * dt_out;
-            }
-        }
+        contact_events(m, o, &c, stats, gap, t, x, &h);
+        output_if_due(m, &out, stats, t, x);
     }
     memcpy(x_end, x, sizeof(x));
     stats->rhs = m->counters.rhs - rhs_before;
