@@ -214,8 +214,8 @@ function(csfh_add_fmu_package name)
   add_custom_target(${name}_fmu_package ALL DEPENDS ${fmu})
 endfunction()
 
-# build/fmi3/<name>.fmu: the FMI 3.0 build of the same model (fmu_src/fmu/fmi3/fmi3_glue.c over the same
-# instance, stepper and model), modelDescription.xml from the same variables file
+# build/fmi3/<name>.fmu: the FMI 3.0 build of the same model (the front-end fmu_src/fmu/fmi3/ over
+# the same instance, stepper and model), modelDescription.xml from the same variables file
 # (generate.py --fmi-version 3), the binaries of every platform built under
 # binaries/<platform tuple>/ (FMI 3.0's names; darwin: one directory per architecture) and the
 # documentation. A binary FMU: the sources are in the FMI 2.0 FMU.

@@ -44,7 +44,7 @@ foreach(_fmu csfh combdrive)
   endforeach()
 endforeach()
 
-# the FMI 3.0 front-end (tests/fuzz/fuzz_fmi3.c): the same sources with fmi3_glue.c
+# the FMI 3.0 front-end (tests/fuzz/fuzz_fmi3.c): the same sources with fmu_src/fmu/fmi3/
 foreach(_fmu csfh combdrive)
   set(_target fuzz_fmi3_${_fmu})
   set(_sources3 ${_fuzz_sources_${_fmu}})

@@ -106,22 +106,13 @@ static int state_owned(fmu_instance_t *inst, const void *FMUstate, const char *f
     return 1;
 }
 
-/* Check a snapshot as if its content were set with fmi2Set* (the same table checks and model
- * checks; the instance is not touched):
- *   header      magic, version, size, GUID; made by an instance of the same type (ME or CS);
- *               its instance state one that this type can be in (ME_RESTORABLE/CS_RESTORABLE);
- *   variables   every stored (not computed) variable of the table, i.e. time, states, inputs,
- *               parameters, discrete states, counters: finite and in its range (enumerations,
- *               Booleans 0/1, declared min/max), as fmi2Set* checks parameters;
- *   model       the model's own checks of what is not a table variable (fmu_model.check_state);
- *   prepare     after initialization, the model's cross-checks (e.g. R1 < R2), with the derived
- *               quantities recomputed, never taken from the bytes; before it, they are
- *               recomputed at the first use as for any parameter set then.
- * The checked model is left in `model` (fmu_model.size bytes) and *prepared says whether its
- * derived quantities are valid. Returns 0, or -1 after logging an error naming the variable and
- * its value. */
-static int snapshot_check(fmu_instance_t *inst, const fmu_snapshot_t *s, void *model,
-                          int *prepared, const char *function)
+static const char *kind_name(int type)
+{
+    return type == (int)FMU_ME ? "model-exchange" : "co-simulation";
+}
+
+/* The snapshot's header (snapshot_check): 0, or -1 (logged). */
+static int header_check(fmu_instance_t *inst, const fmu_snapshot_t *s, const char *function)
 {
     if (s->magic != FMU_STATE_MAGIC || s->version != FMU_STATE_VERSION ||
         s->size != snapshot_size() || strncmp(s->guid, fmu_model.guid, sizeof(s->guid)) != 0) {
@@ -136,8 +127,7 @@ static int snapshot_check(fmu_instance_t *inst, const fmu_snapshot_t *s, void *m
     }
     if (s->type != (int)inst->type) {
         FMU_LOG_ERROR(inst, "%s: the FMUstate was made by a %s instance, this one is %s", function,
-                  s->type == (int)FMU_ME ? "model-exchange" : "co-simulation",
-                  inst->type == FMU_ME ? "model-exchange" : "co-simulation");
+                      kind_name(s->type), kind_name((int)inst->type));
         return -1;
     }
     const unsigned int restorable =
@@ -146,8 +136,7 @@ static int snapshot_check(fmu_instance_t *inst, const fmu_snapshot_t *s, void *m
     const unsigned int st = s->state;
     if (st == 0 || (st & (st - 1)) != 0 || (st & restorable) == 0) { /* exactly one valid bit */
         FMU_LOG_ERROR(inst, "%s: the FMUstate's instance state %u is not a state a %s instance can "
-                        "be restored to", function, st,
-                  inst->type == FMU_ME ? "model-exchange" : "co-simulation");
+                        "be restored to", function, st, kind_name((int)inst->type));
         return -1;
     }
     if (s->warned_outputs != 0 && s->warned_outputs != 1) {
@@ -155,7 +144,14 @@ static int snapshot_check(fmu_instance_t *inst, const fmu_snapshot_t *s, void *m
                   s->warned_outputs);
         return -1;
     }
-    memcpy(model, s->model, fmu_model.size);
+    return 0;
+}
+
+/* The snapshot's model (snapshot_check), restored into the instance state st: 0, or -1
+ * (logged). */
+static int model_check(fmu_instance_t *inst, void *model, unsigned int st, int *prepared,
+                       const char *function)
+{
     char msg[FMU_MSG_SIZE];
     for (int i = 0; i < fmu_model.n_variables; i++) {
         const csfh_variable_t *v = &fmu_model.variables[i];
@@ -179,6 +175,30 @@ static int snapshot_check(fmu_instance_t *inst, const fmu_snapshot_t *s, void *m
         return -1;
     }
     return 0;
+}
+
+/* Check a snapshot as if its content were set with fmi2Set* (the same table checks and model
+ * checks; the instance is not touched):
+ *   header      magic, version, size, GUID; made by an instance of the same type (ME or CS);
+ *               its instance state one that this type can be in (ME_RESTORABLE/CS_RESTORABLE);
+ *   variables   every stored (not computed) variable of the table, i.e. time, states, inputs,
+ *               parameters, discrete states, counters: finite and in its range (enumerations,
+ *               Booleans 0/1, declared min/max), as fmi2Set* checks parameters;
+ *   model       the model's own checks of what is not a table variable (fmu_model.check_state);
+ *   prepare     after initialization, the model's cross-checks (e.g. R1 < R2), with the derived
+ *               quantities recomputed, never taken from the bytes; before it, they are
+ *               recomputed at the first use as for any parameter set then.
+ * The checked model is left in `model` (fmu_model.size bytes) and *prepared says whether its
+ * derived quantities are valid. Returns 0, or -1 after logging an error naming the variable and
+ * its value. */
+static int snapshot_check(fmu_instance_t *inst, const fmu_snapshot_t *s, void *model,
+                          int *prepared, const char *function)
+{
+    if (header_check(inst, s, function) != 0) {
+        return -1;
+    }
+    memcpy(model, s->model, fmu_model.size);
+    return model_check(inst, model, s->state, prepared, function);
 }
 
 fmu_status_t fmu_state_get(fmu_instance_t *inst, const char *function, void **state)

@@ -48,10 +48,35 @@ static fmu_status_t refresh(fmu_instance_t *inst, unsigned char what, const char
     }
 }
 
+/* The value at p (of the reference's entry e) into value[i], as `kind`. */
+static inline void copy_value(const char *p, const fmu_vr_get_t *e, fmu_value_kind_t kind,
+                              void *value, size_t i)
+{
+    int n;
+    switch (kind) {
+    case FMU_VALUE_DOUBLE:
+        memcpy((double *)value + i, p, sizeof(double));
+        break;
+    case FMU_VALUE_INT:
+        memcpy(&n, p, sizeof(n));
+        ((int *)value)[i] = e->boolean ? (n != 0) : n;
+        break;
+    case FMU_VALUE_INT64:
+        memcpy(&n, p, sizeof(n));
+        ((int64_t *)value)[i] = (int64_t)n;
+        break;
+    default:
+        memcpy(&n, p, sizeof(n));
+        ((bool *)value)[i] = n != 0;
+        break;
+    }
+}
+
 fmu_status_t fmu_get_values(fmu_instance_t *inst, const char *function, const unsigned int vr[],
                             size_t nvr, unsigned int accept, fmu_value_kind_t kind, void *value)
 {
-    if (nvr > 0 && (!fmu_not_null(inst, function, vr, "vr") || !fmu_not_null(inst, function, value, "value"))) {
+    if (nvr > 0 && (!fmu_not_null(inst, function, vr, "vr") ||
+                    !fmu_not_null(inst, function, value, "value"))) {
         return FMU_ERROR;
     }
     fmu_status_t status = FMU_OK;
@@ -72,30 +97,7 @@ fmu_status_t fmu_get_values(fmu_instance_t *inst, const char *function, const un
             }
             status = s > status ? s : status;
         }
-        const char *p = model + e->offset;
-        switch (kind) {
-        case FMU_VALUE_DOUBLE:
-            memcpy((double *)value + i, p, sizeof(double));
-            break;
-        case FMU_VALUE_INT: {
-            int n;
-            memcpy(&n, p, sizeof(n));
-            ((int *)value)[i] = e->boolean ? (n != 0) : n;
-            break;
-        }
-        case FMU_VALUE_INT64: {
-            int n;
-            memcpy(&n, p, sizeof(n));
-            ((int64_t *)value)[i] = (int64_t)n;
-            break;
-        }
-        default: {
-            int n;
-            memcpy(&n, p, sizeof(n));
-            ((bool *)value)[i] = n != 0;
-            break;
-        }
-        }
+        copy_value(model + e->offset, e, kind, value, i);
     }
     return status;
 }
@@ -147,6 +149,50 @@ static double set_value_at(const csfh_variable_t *v, fmu_value_kind_t kind, cons
     }
 }
 
+/* Every value of a set call valid for its variable in the instance's state (logged if not): 0,
+ * or -1. *tunable: a parameter is set while running. */
+static int check_values(fmu_instance_t *inst, const char *function, const unsigned int vr[],
+                        size_t nvr, unsigned int accept, fmu_value_kind_t kind, const void *value,
+                        int *tunable)
+{
+    char msg[FMU_MSG_SIZE];
+    *tunable = 0;
+    for (size_t i = 0; i < nvr; i++) {
+        const csfh_variable_t *v = lookup(inst, function, vr[i], accept);
+        if (v == NULL || !settable(inst, v, function)) {
+            return -1;
+        }
+        if (csfh_check_value(v, set_value_at(v, kind, value, i), msg, sizeof(msg)) != 0) {
+            FMU_LOG_ERROR(inst, "%s: %s", function, msg);
+            return -1;
+        }
+        *tunable = *tunable || (v->causality == CSFH_CAUS_PARAMETER &&
+                                !(inst->state & (FMU_INSTANTIATED | FMU_INITIALIZATION)));
+    }
+    return 0;
+}
+
+/* Set the (checked) values; *parameter: a parameter was set, *restart: the co-simulation
+ * integrator must restart (a new state, or a new input value: inputs are held constant over a
+ * communication step, so a change is a discontinuity of the right-hand side). */
+static void apply_values(fmu_instance_t *inst, const char *function, const unsigned int vr[],
+                         size_t nvr, unsigned int accept, fmu_value_kind_t kind, const void *value,
+                         int *parameter, int *restart)
+{
+    for (size_t i = 0; i < nvr; i++) {
+        const csfh_variable_t *v = lookup(inst, function, vr[i], accept);
+        const double x = set_value_at(v, kind, value, i);
+        const double old = v->type == CSFH_TYPE_REAL ? *real_of(inst, v) : (double)*int_of(inst, v);
+        if (v->type == CSFH_TYPE_REAL) {
+            *real_of(inst, v) = x;
+        } else {
+            *int_of(inst, v) = (int)x;
+        }
+        *parameter = *parameter || v->causality == CSFH_CAUS_PARAMETER;
+        *restart = *restart || v->is_state || (v->causality == CSFH_CAUS_INPUT && old != x);
+    }
+}
+
 /* All or nothing: every value is checked before any is applied, and tunable parameters set while
  * running are validated together (the model's cross-checks) and rolled back together, so a
  * rejected call leaves the instance exactly as it was. */
@@ -154,22 +200,13 @@ fmu_status_t fmu_set_values(fmu_instance_t *inst, const char *function, const un
                             size_t nvr, unsigned int accept, fmu_value_kind_t kind,
                             const void *value)
 {
-    if (nvr > 0 && (!fmu_not_null(inst, function, vr, "vr") || !fmu_not_null(inst, function, value, "value"))) {
+    if (nvr > 0 && (!fmu_not_null(inst, function, vr, "vr") ||
+                    !fmu_not_null(inst, function, value, "value"))) {
         return FMU_ERROR;
     }
-    char msg[FMU_MSG_SIZE];
     int tunable = 0;
-    for (size_t i = 0; i < nvr; i++) {
-        const csfh_variable_t *v = lookup(inst, function, vr[i], accept);
-        if (v == NULL || !settable(inst, v, function)) {
-            return FMU_ERROR;
-        }
-        if (csfh_check_value(v, set_value_at(v, kind, value, i), msg, sizeof(msg)) != 0) {
-            FMU_LOG_ERROR(inst, "%s: %s", function, msg);
-            return FMU_ERROR;
-        }
-        tunable = tunable || (v->causality == CSFH_CAUS_PARAMETER &&
-                              !(inst->state & (FMU_INSTANTIATED | FMU_INITIALIZATION)));
+    if (check_values(inst, function, vr, nvr, accept, kind, value, &tunable) != 0) {
+        return FMU_ERROR;
     }
     /* every value is valid: first the outputs over the communication step (peaks), with the
      * values they were taken with (a parameter changes them; kept if the new ones are rolled
@@ -185,21 +222,9 @@ fmu_status_t fmu_set_values(fmu_instance_t *inst, const char *function, const un
         memcpy(saved, inst->model, fmu_model.size);
     }
     int restart = tunable, parameter = 0;
-    for (size_t i = 0; i < nvr; i++) {
-        const csfh_variable_t *v = lookup(inst, function, vr[i], accept);
-        const double x = set_value_at(v, kind, value, i);
-        const double old = v->type == CSFH_TYPE_REAL ? *real_of(inst, v) : (double)*int_of(inst, v);
-        if (v->type == CSFH_TYPE_REAL) {
-            *real_of(inst, v) = x;
-        } else {
-            *int_of(inst, v) = (int)x;
-        }
-        parameter = parameter || v->causality == CSFH_CAUS_PARAMETER;
-        /* a new state, or a new input value (inputs are held constant over a communication step,
-         * so a change is a discontinuity of the right-hand side): restart the CS integrator */
-        restart = restart || v->is_state || (v->causality == CSFH_CAUS_INPUT && old != x);
-    }
+    apply_values(inst, function, vr, nvr, accept, kind, value, &parameter, &restart);
     if (tunable) {
+        char msg[FMU_MSG_SIZE];
         const int failed = fmu_model.prepare(inst->model, msg, sizeof(msg)) != 0;
         if (failed) {
             memcpy(inst->model, saved, fmu_model.size);

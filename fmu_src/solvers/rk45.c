@@ -11,9 +11,7 @@
 #include "rk45.h"
 
 #include <float.h>
-#include <stdarg.h>
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -64,17 +62,6 @@
                                 stability boundary (DP5: 3.3 on the negative real axis); a
                                 step that accuracy sets is far shorter */
 
-
-#if defined(__GNUC__)
-__attribute__((format(printf, 2, 3), cold))
-#endif
-void rk45_set_message(rk45_t *r, const char *fmt, ...)
-{
-    va_list args;
-    va_start(args, fmt);
-    vsnprintf(r->message, sizeof r->message, fmt, args);
-    va_end(args);
-}
 
 rk45_t *rk45_create(int n, int n_roots, rk45_rhs_fn f, rk45_root_fn g, void *user)
 {
@@ -493,33 +480,4 @@ double rk45_next_step(const rk45_t *r)
 void rk45_get_stats(const rk45_t *r, rk45_stats_t *s)
 {
     *s = r->stats;
-}
-
-const char *rk45_message(const rk45_t *r)
-{
-    return r->message;
-}
-
-const char *rk45_flag_name(int flag)
-{
-    switch (flag) {
-    case RK45_SUCCESS:
-        return "RK45_SUCCESS";
-    case RK45_ROOT:
-        return "RK45_ROOT";
-    case RK45_MEM_FAIL:
-        return "RK45_MEM_FAIL";
-    case RK45_ILL_INPUT:
-        return "RK45_ILL_INPUT";
-    case RK45_ERR_FAILURE:
-        return "RK45_ERR_FAILURE";
-    case RK45_RHS_FAILURE:
-        return "RK45_RHS_FAILURE";
-    case RK45_ROOT_FAILURE:
-        return "RK45_ROOT_FAILURE";
-    case RK45_TOO_SMALL:
-        return "RK45_TOO_SMALL";
-    default:
-        return "an unknown flag";
-    }
 }

@@ -1,5 +1,6 @@
 /* The state of the explicit Runge-Kutta 5(4) (rk45.h), shared by its files: rk45.c (the steps
- * and their size), rk45_dense.c (dense output, saved steps), rk45_roots.c (root finding). */
+ * and their size), rk45_dense.c (dense output, saved steps), rk45_roots.c (root finding),
+ * rk45_message.c (failure messages). */
 #ifndef CSFH_RK45_INTERNAL_H
 #define CSFH_RK45_INTERNAL_H
 
@@ -39,7 +40,7 @@ struct rk45 {
     double *block; /* every vector above */
 };
 
-/* The message of the last failure (rk45_message). */
+/* The message of the last failure (rk45_message; rk45_message.c). */
 #if defined(__GNUC__)
 __attribute__((format(printf, 2, 3), cold))
 #endif

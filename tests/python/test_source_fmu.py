@@ -41,6 +41,7 @@ CSFH_SOURCES = {
     "rk45.c",
     "rk45_dense.c",
     "rk45_roots.c",
+    "rk45_message.c",
     "csfh_fmu_model.c",
     "csfh_fmu.c",
     "csfh_peaks.c",

@@ -61,6 +61,29 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
                                     categories));
 }
 
+/* fmi2Instantiate's arguments: 0 if they are fine, else -1 (told to the logger, if any). */
+static int instantiate_refused(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                               fmi2CallbackLogger logger, fmi2ComponentEnvironment env)
+{
+    const char *name = instanceName != NULL ? instanceName : fmu_model.model_identifier;
+    char msg[MSG_SIZE];
+    if (instanceName == NULL || instanceName[0] == '\0') {
+        snprintf(msg, sizeof(msg), "fmi2Instantiate: instanceName is NULL or empty");
+    } else if (fmuGUID == NULL || strcmp(fmuGUID, fmu_model.guid) != 0) {
+        snprintf(msg, sizeof(msg),
+                 "fmi2Instantiate: fmuGUID does not match this binary (expected %s)",
+                 fmu_model.guid);
+    } else if (fmuType != fmi2ModelExchange && fmuType != fmi2CoSimulation) {
+        snprintf(msg, sizeof(msg), "fmi2Instantiate: unknown fmuType");
+    } else {
+        return 0;
+    }
+    if (logger) {
+        logger(env, name, fmi2Error, "logStatusError", msg);
+    }
+    return -1;
+}
+
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
@@ -70,28 +93,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     (void)visible;
     fmi2CallbackLogger logger = functions != NULL ? functions->logger : NULL;
     fmi2ComponentEnvironment env = functions != NULL ? functions->componentEnvironment : NULL;
-    const char *name = instanceName != NULL ? instanceName : fmu_model.model_identifier;
-    if (instanceName == NULL || instanceName[0] == '\0') {
-        if (logger) {
-            logger(env, name, fmi2Error, "logStatusError",
-                   "fmi2Instantiate: instanceName is NULL or empty");
-        }
-        return NULL;
-    }
-    if (fmuGUID == NULL || strcmp(fmuGUID, fmu_model.guid) != 0) {
-        if (logger) {
-            char msg[MSG_SIZE];
-            snprintf(msg, sizeof(msg),
-                     "fmi2Instantiate: fmuGUID does not match this binary (expected %s)",
-                     fmu_model.guid);
-            logger(env, name, fmi2Error, "logStatusError", msg);
-        }
-        return NULL;
-    }
-    if (fmuType != fmi2ModelExchange && fmuType != fmi2CoSimulation) {
-        if (logger) {
-            logger(env, name, fmi2Error, "logStatusError", "fmi2Instantiate: unknown fmuType");
-        }
+    if (instantiate_refused(instanceName, fmuType, fmuGUID, logger, env) != 0) {
         return NULL;
     }
     fmu_instance_t *inst = fmu_instance_new(instanceName,
