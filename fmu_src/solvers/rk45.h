@@ -9,7 +9,8 @@
  * Why our own and not SUNDIALS ARKODE's ERKStep (same Dormand-Prince table, root finding and
  * dense output): for six states its per-step bookkeeping (vector operations through function
  * pointers, Hermite interpolation that costs an extra right-hand side per evaluation at degree 4)
- * costs more than the steps themselves; benchmarks/bench_rk45.c measures both in the same loop.
+ * costs more than the steps themselves; benchmarks/rk45/bench_rk45_arkode.c measures both in the
+ * same loop.
  *
  * No FMI types and no SUNDIALS: the co-simulation stepper (cosimulation.c) drives it. One step per
  * call (rk45_step), like CVODE's CV_ONE_STEP mode: a step may end anywhere; the state at any time

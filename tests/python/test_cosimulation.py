@@ -46,8 +46,8 @@ METHODS = {"auto": 1, "BDF": 2, "Adams": 3, "RK45": 4}  # enumeration SolverMeth
 TRIAL = "auto: trying BDF"  # auto's logEvents line when RK45 struggles
 KEPT = "auto: BDF kept"  # ... when BDF's trial steps are long enough
 BACK = "auto: back to RK45"  # ... when they are not
-AUTO_WINDOW = 100  # integrator steps per decision of auto (cosimulation.c)
-AUTO_BDF_COST = 2.0  # a BDF step costs that many RK45 steps (cosimulation.c, model §10.7)
+AUTO_WINDOW = 100  # integrator steps per decision of auto (auto_policy.c)
+AUTO_BDF_COST = 2.0  # a BDF step costs that many RK45 steps (auto_policy.c, model §10.7)
 
 
 # ------------------------------------------------------------------------------------------
