@@ -35,6 +35,12 @@ SIGNALS = ("x", "y", "theta", "F_N", "F_T")
 the grid points; F_N and F_T the value of largest magnitude in each output interval (t_k-1, t_k]
 (event-driven: over every integrator step; Moreau: the step with the largest impulse), so that an
 impact peak does not depend on where the grid happens to cut it."""
+KEY_DIGITS = 24
+"""Hexadecimal digits of a task key (`task_key`)."""
+SUMMARY_KEYS = ("first_contact", "contacts", "peak_F_N", "peak_abs_F_T", "steps")
+"""What every task summary holds (`_summary`; co-simulation adds the stress peaks): the first
+contact time in s (None: no contact), the number of contacts, the peak normal and tangential
+force in N, and the integrator steps."""
 _FMU_LOCK = threading.Lock()  # fmpy instances in one process: one run at a time (Dask threads)
 
 
@@ -121,7 +127,7 @@ def task_key(task: Task) -> str:
         "signals": task.signals,
     }
     text = json.dumps(spec, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()[:24]
+    return hashlib.sha256(text.encode()).hexdigest()[:KEY_DIGITS]
 
 
 def grid(stop_time: float, output_interval: float) -> np.ndarray:
@@ -156,13 +162,8 @@ def _summary(
     steps: int,
     stresses: tuple[float, float] | None = None,
 ) -> dict[str, Any]:
-    out: dict[str, Any] = {
-        "first_contact": first,
-        "contacts": int(contacts),
-        "peak_F_N": float(peak_fn),
-        "peak_abs_F_T": float(peak_ft),
-        "steps": int(steps),
-    }
+    values = (first, int(contacts), float(peak_fn), float(peak_ft), int(steps))
+    out: dict[str, Any] = dict(zip(SUMMARY_KEYS, values, strict=True))
     if stresses is not None:  # co-simulation: the peak flexure stress and contact pressure, Pa
         out["peak_flexure_stress"] = float(stresses[0])
         out["peak_contact_pressure"] = float(stresses[1])
