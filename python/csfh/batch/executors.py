@@ -150,7 +150,10 @@ def _run_processes(
 ) -> None:
     ctx = multiprocessing.get_context("spawn")
     pool = ProcessPoolExecutor(
-        max_workers=min(workers, len(chunks)), mp_context=ctx, initializer=worker_init
+        max_workers=min(workers, len(chunks)),
+        mp_context=ctx,
+        initializer=worker_init,
+        initargs=(os.getpid(),),  # a worker ends with this process, even after a SIGKILL
     )
     futures: set[Future[list[Result]]] = set()
     try:

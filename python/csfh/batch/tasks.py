@@ -12,9 +12,12 @@ model-exchange tasks run through fmpy one at a time."""
 
 from __future__ import annotations
 
+import ctypes
 import hashlib
 import json
+import os
 import signal
+import sys
 import threading
 import time
 from collections.abc import Sequence
@@ -332,10 +335,39 @@ def batchable(tasks: Sequence[Task]) -> bool:
     return group is not None and all(batch_group(t) == group for t in tasks)
 
 
-def worker_init() -> None:
+def worker_init(parent: int | None = None) -> None:
     """Ctrl-C goes to the whole process group: a worker ignores it and the parent decides (it
     keeps what is done and ends the workers). The parent starts workers with SIGINT blocked, so
-    that one during the start-up is discarded here too."""
+    that one during the start-up is discarded here too. With `parent` (the parent's process
+    id) the worker also ends when its parent does (`end_with_parent`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     if hasattr(signal, "pthread_sigmask"):
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    if parent is not None:
+        end_with_parent(parent)
+
+
+_PR_SET_PDEATHSIG = 1  # <sys/prctl.h>
+
+
+def end_with_parent(parent: int) -> None:
+    """End this process when the process `parent` ends, even by SIGKILL, which gives it no
+    chance to end its workers: a worker would otherwise wait for work forever, and keep
+    multiprocessing's resource tracker alive with it. On Linux at once (the kernel's
+    parent-death signal, prctl PR_SET_PDEATHSIG); everywhere within a second (a thread that
+    watches the parent's process id, which changes when the parent is gone)."""
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):  # no prctl: the thread alone
+            pass
+    if os.getppid() != parent:  # ended before the signal was asked for
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
+
+
+def _watch_parent(parent: int) -> None:
+    while os.getppid() == parent:
+        time.sleep(0.5)
+    os._exit(1)
