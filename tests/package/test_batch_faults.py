@@ -1,13 +1,18 @@
 """Batched runs under faults (csfh.batch): a sweep killed with SIGKILL leaves no process behind
-(its workers and multiprocessing's resource tracker end by themselves) and resumes; two identical
-sweeps into one directory at once share the work instead of each computing every run."""
+(its workers and multiprocessing's resource tracker end by themselves) and resumes; a Dask
+scheduler without a worker that runs the tasks, or one that goes away, is one line naming it,
+within a time-out, and keeps the finished runs."""
 
 from __future__ import annotations
 
 import os
+import signal
+import socket
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -91,3 +96,127 @@ def test_kill_9_of_a_sweep_leaves_no_worker_and_no_resource_tracker(tmp_path: Pa
     assert again.returncode == 0, err
     assert f"({18 - kept} computed, {kept} reused" in out
     assert list((tmp_path / "signals").glob(".*.tmp")) == []
+
+
+# ------------------------------------------------------------------------------------------
+# Dask: no worker that runs the tasks, a scheduler that goes away
+
+DASK = Path(sys.executable).with_name("dask")
+BLOCK_CSFH = """
+import sys
+
+class _NoCsfh:
+    def find_spec(self, name, path=None, target=None):
+        if name == "csfh" or name.startswith("csfh."):
+            raise ImportError(f"No module named {name!r}")
+        return None
+
+sys.meta_path.insert(0, _NoCsfh())
+"""
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@contextmanager
+def dask_process(*args: str, env: dict[str, str] | None = None) -> Iterator[subprocess.Popen[str]]:
+    """`dask ARGS` (a scheduler or a worker) in the background, ended (by its id) at the end."""
+    proc = subprocess.Popen(
+        [str(DASK), *args],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        env=env,
+        start_new_session=True,  # its nanny and worker processes go with it
+    )
+    try:
+        yield proc
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+
+
+@contextmanager
+def dask_cluster(worker_env: dict[str, str] | None) -> Iterator[tuple[str, subprocess.Popen[str]]]:
+    """A scheduler and one single-threaded worker (with `worker_env`), as subprocesses; the
+    scheduler's address and process."""
+    distributed = pytest.importorskip("distributed")
+    if not DASK.exists():
+        pytest.skip("the dask command is not installed")
+    address = f"tcp://127.0.0.1:{free_port()}"
+    scheduler_args = ["scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1]]
+    with dask_process(*scheduler_args, "--no-dashboard") as scheduler:
+        worker_args = ["worker", address, "--nworkers", "1", "--nthreads", "1", "--no-dashboard"]
+        with dask_process(*worker_args, env=worker_env):
+            with distributed.Client(address, timeout="20s") as client:
+                client.wait_for_workers(1, timeout=20)
+            yield address, scheduler
+
+
+DASK_SWEEP = ["sweep", "central", "--models", "Moreau", "--params", "R1", "--stop-time", "0.05"]
+DASK_SWEEP += ["--quiet"]
+
+
+def one_error(proc: subprocess.Popen[str], timeout: float) -> str:
+    """The one line a failed command writes on standard error."""
+    _, err = proc.communicate(timeout=timeout)
+    assert proc.returncode == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("csfh: error: "), err
+    return lines[0]
+
+
+def test_a_dask_scheduler_without_workers_times_out_naming_it(tmp_path: Path) -> None:
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=0, processes=False, protocol="tcp", host="127.0.0.1", dashboard_address=None
+    ) as cluster:
+        env = dict(os.environ, CSFH_DASK_TIMEOUT="3")
+        start = time.monotonic()
+        proc = csfh_process(
+            *DASK_SWEEP, "--dask", cluster.scheduler_address, "--out", str(tmp_path), env=env
+        )
+        try:
+            line = one_error(proc, 60)
+        finally:
+            proc.kill()
+        assert cluster.scheduler_address in line and "no Dask worker" in line, line
+        assert time.monotonic() - start < 30
+
+
+def test_dask_workers_that_cannot_import_csfh_time_out(tmp_path: Path) -> None:
+    (tmp_path / "hook").mkdir()
+    (tmp_path / "hook" / "sitecustomize.py").write_text(BLOCK_CSFH)
+    worker_env = dict(os.environ, PYTHONPATH=str(tmp_path / "hook"))
+    with dask_cluster(worker_env) as (address, _):
+        env = dict(os.environ, CSFH_DASK_TIMEOUT="5")
+        proc = csfh_process(*DASK_SWEEP, "--dask", address, "--out", str(tmp_path / "o"), env=env)
+        try:
+            line = one_error(proc, 60)
+        finally:
+            proc.kill()
+        assert address in line and "csfh" in line, line
+
+
+def test_a_dask_scheduler_killed_mid_run_is_one_line_and_the_rerun_resumes(
+    tmp_path: Path,
+) -> None:
+    with dask_cluster(None) as (address, scheduler):
+        proc = csfh_process(*SWEEP, "--dask", address, "--out", str(tmp_path))
+        try:
+            assert wait_for(lambda: len(ResultStore(tmp_path)) >= 2, 60), "no run finished"
+            os.killpg(scheduler.pid, signal.SIGKILL)
+            line = one_error(proc, 60)
+        finally:
+            proc.kill()
+    assert address in line and "kept" in line, line
+    kept = len(ResultStore(tmp_path))
+    assert 2 <= kept < 18
+    again = csfh_process(*SWEEP, "--workers", "2", "--out", str(tmp_path))
+    out, err = again.communicate(timeout=120)
+    assert again.returncode == 0, err
+    assert f"({18 - kept} computed, {kept} reused" in out
