@@ -1,11 +1,14 @@
 """Batched runs under faults (csfh.batch): a sweep killed with SIGKILL leaves no process behind
 (its workers and multiprocessing's resource tracker end by themselves) and resumes; a Dask
 scheduler without a worker that runs the tasks, or one that goes away, is one line naming it,
-within a time-out, and keeps the finished runs."""
+within a time-out, and keeps the finished runs; two identical sweeps into one directory at once
+share the runs instead of each computing every one."""
 
 from __future__ import annotations
 
+import json
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -220,3 +223,64 @@ def test_a_dask_scheduler_killed_mid_run_is_one_line_and_the_rerun_resumes(
     out, err = again.communicate(timeout=120)
     assert again.returncode == 0, err
     assert f"({18 - kept} computed, {kept} reused" in out
+
+
+# ------------------------------------------------------------------------------------------
+# two identical sweeps at once
+
+TWIN = ["sweep", "central", "--models", "LN_cylinders", "LN_spheres", "--params", "R1", "m1", "h"]
+TWIN += ["--stop-time", "0.3", "--workers", "1"]
+"""14 model-exchange runs, some 6 s of work on one core."""
+
+
+def test_two_identical_sweeps_at_once_share_the_runs(tmp_path: Path) -> None:
+    procs = [csfh_process(*TWIN, "--out", str(tmp_path)) for _ in range(2)]
+    try:
+        outputs = [p.communicate(timeout=180) for p in procs]
+    finally:
+        for p in procs:
+            p.kill()
+    assert [p.returncode for p in procs] == [0, 0], [err for _, err in outputs]
+    counts = [
+        re.search(r"sweep: 14 runs \((\d+) computed, (\d+) reused", out) for out, _ in outputs
+    ]
+    assert all(counts), outputs
+    computed = [int(m.group(1)) for m in counts if m]
+    assert sum(computed) == 14, f"the two sweeps computed {computed} of the 14 runs"
+    keys = [json.loads(line)["key"] for line in (tmp_path / "tasks.jsonl").read_text().splitlines()]
+    assert len(keys) == len(set(keys)) == 14
+    # the same report: every line but the last (which says what was computed and reused)
+    reports = [out.strip().splitlines()[:-1] for out, _ in outputs]
+    assert reports[0] == reports[1] and reports[0]
+    assert list((tmp_path / "claims").iterdir()) == []
+
+
+CLAIMER = """
+import sys, time
+from csfh.batch.store import ResultStore
+with ResultStore(sys.argv[1]).claimed(sys.argv[2:]) as mine:
+    print(len(mine), flush=True)
+    time.sleep(600)
+"""
+
+
+def test_the_claims_of_a_killed_command_are_taken_over(tmp_path: Path) -> None:
+    keys = [f"{k:024x}" for k in range(5)]
+    claimer = subprocess.Popen(
+        [sys.executable, "-c", CLAIMER, str(tmp_path), *keys[:3]], stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert claimer.stdout is not None and claimer.stdout.readline().strip() == "3"
+        store = ResultStore(tmp_path)
+        with store.claimed(keys) as mine:
+            assert mine == set(keys[3:])  # the other command's runs are left to it
+        claimer.kill()  # SIGKILL: its claim file stays, its lock does not
+        claimer.wait()
+        assert len(list((tmp_path / "claims").iterdir())) == 1
+        with store.claimed(keys) as mine:
+            assert mine == set(keys)
+            assert len(list((tmp_path / "claims").iterdir())) == 1  # this command's own
+        assert list((tmp_path / "claims").iterdir()) == []
+    finally:
+        claimer.kill()
+        claimer.wait()

@@ -347,3 +347,17 @@ def run_csfh_store(out: Path) -> subprocess.CompletedProcess[str]:
     """A tiny sweep into `out`, in a subprocess (a FIFO read in place would never return)."""
     args = ["sweep", "central", "--models", "Moreau", "--params", "R1", "--stop-time", "0.05"]
     return run_csfh(*args, "--quiet", "--workers", "1", "--out", str(out), timeout=60)
+
+
+def test_refresh_reads_what_another_command_appended(
+    tasks: list[Task], full: dict[str, bytes], tmp_path: Path
+) -> None:
+    out = restore(full, tmp_path)
+    lines = index_lines(out)
+    (out / "tasks.jsonl").write_bytes(b"".join(lines[:5]))
+    mine, theirs = ResultStore(out), ResultStore(out)
+    with open(out / "tasks.jsonl", "ab") as fh:  # another command's appends, one of them bad
+        fh.write(b"".join([lines[5], b"#%!\n", lines[6]]))
+    assert mine.refresh() == {key_of(lines[5]), key_of(lines[6])}
+    assert mine.refresh() == set() and len(mine) == 7 and len(theirs) == 5
+    check_kept_all_but(mine, tasks, {key_of(line) for line in lines[7:]})

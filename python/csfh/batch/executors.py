@@ -69,51 +69,71 @@ def run_tasks(
 ) -> RunReport:
     """Compute the tasks not yet in `store` and add their results as they complete. workers=1
     runs serially in this process; more uses that many local processes (default: all cores);
-    dask_address sends the chunks to a Dask distributed scheduler. Ctrl-C (KeyboardInterrupt)
-    propagates after pending work is cancelled; everything finished so far is in the store."""
+    dask_address sends the chunks to a Dask distributed scheduler. Tasks that another command
+    on the same store has claimed are not computed again: their results are waited for (and
+    computed here if that command ends without them). Ctrl-C (KeyboardInterrupt) propagates
+    after pending work is cancelled; everything finished so far is in the store."""
     unique: dict[str, Task] = {}
     for t in tasks:
         unique.setdefault(t.key, t)
-    pending = [t for k, t in unique.items() if k not in store]
-    reused = len(unique) - len(pending)
+    pending = {k: t for k, t in unique.items() if k not in store}
     n_workers = default_workers() if workers is None else max(1, workers)
-    chunks = make_chunks(pending, n_workers if dask_address is None else max(n_workers, 8), batch)
-    by_key = {t.key: t for t in pending}
     progress = Progress(label, quiet=quiet, total=len(pending))
-    done = 0
+    done, elsewhere, executor = 0, 0, "none (all reused)"
     wall = time.perf_counter()
 
     def accept(results: Iterable[Result]) -> None:
         nonlocal done
-        batch = [(by_key[key], summary, sig, wall) for key, summary, sig, wall in results]
+        batch = [(pending[key], summary, sig, wall) for key, summary, sig, wall in results]
         store.add_many(batch)
         done += len(batch)
-        progress.update(done)
+        progress.update(done + elsewhere)
         if on_result is not None:
             on_result(done, len(pending))
 
     try:
-        if not chunks:
-            executor = "none (all reused)"
-        elif dask_address is not None:
-            executor = f"dask {dask_address}"
-            _run_dask(chunks, dask_address, accept, dask_timeout())
-        elif n_workers == 1 or len(chunks) == 1:
-            executor = "serial"
-            for chunk in chunks:
-                accept(run_chunk(chunk))
-        else:
-            executor = f"{n_workers} local processes"
-            _run_processes(chunks, n_workers, accept)
+        while left := [t for k, t in pending.items() if k not in store]:
+            with store.claimed([t.key for t in left]) as mine:
+                if mine:
+                    todo = [t for t in left if t.key in mine]
+                    executor = _execute(todo, accept, n_workers, dask_address, batch)
+            if not mine:  # all claimed by other commands: wait for their results
+                time.sleep(CLAIM_POLL)
+            elsewhere += len(store.refresh().intersection(pending))
+            progress.update(done + elsewhere)
     finally:
         progress.close()
     return RunReport(
         total=len(unique),
-        reused=reused,
+        reused=len(unique) - done,
         computed=done,
         wall_time=time.perf_counter() - wall,
         executor=executor,
     )
+
+
+CLAIM_POLL = 0.5
+"""Seconds between looks at the store while another command computes the claimed runs."""
+
+
+def _execute(
+    tasks: list[Task],
+    accept: Callable[[Iterable[Result]], None],
+    n_workers: int,
+    dask_address: str | None,
+    batch: int,
+) -> str:
+    """Compute `tasks` in chunks on the executor chosen (see `run_tasks`); what it was."""
+    chunks = make_chunks(tasks, n_workers if dask_address is None else max(n_workers, 8), batch)
+    if dask_address is not None:
+        _run_dask(chunks, dask_address, accept, dask_timeout())
+        return f"dask {dask_address}"
+    if n_workers == 1 or len(chunks) == 1:
+        for chunk in chunks:
+            accept(run_chunk(chunk))
+        return "serial"
+    _run_processes(chunks, n_workers, accept)
+    return f"{n_workers} local processes"
 
 
 @contextmanager

@@ -18,7 +18,14 @@ files are never rewritten in place: the skipped lines are moved, byte for byte, 
 tasks.rejected.jsonl (appended), and tasks.jsonl is replaced by its good lines in one atomic
 rename. Writers take a lock (tasks.lock), so that two commands on one directory do not mix their
 lines. The store's files must be regular files and signals/ a real directory (else ResultsError,
-csfh.safepath); temporary files of killed processes are removed when the store is opened."""
+csfh.safepath); temporary files of killed processes are removed when the store is opened.
+
+Claims (claims/PID-TOKEN.json): a command that computes runs claims the ones no other live
+command has claimed (`ResultStore.claimed`, under the lock) and holds an exclusive lock on its
+claim file while it computes them, so that a second command on the same directory computes only
+the rest and waits for the claimed runs (`ResultStore.refresh` reads what the other appends).
+The lock ends with its process, even a killed one: a claim whose lock can be taken is stale and
+removed, and its runs are claimed again."""
 
 from __future__ import annotations
 
@@ -28,8 +35,10 @@ import json
 import math
 import os
 import re
+import secrets
 import zipfile
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, cast
 
@@ -52,6 +61,8 @@ INDEX = "tasks.jsonl"
 REJECTED = "tasks.rejected.jsonl"
 LOCK = "tasks.lock"
 SIGNALS = "signals"
+CLAIMS = "claims"
+_CLAIM = re.compile(r"^[0-9]{1,10}-[0-9a-f]{8}\.json$")
 FORMAT = 2
 """The format of a record (2: with its checksum, record_sha256)."""
 _KEY = re.compile(f"^[0-9a-f]{{{KEY_DIGITS}}}$")
@@ -154,6 +165,7 @@ class ResultStore:
         self.index = self.directory / INDEX
         self.records: dict[str, dict[str, Any]] = {}
         self.problems: list[str] = []
+        self._read_to = (0, 0)  # (inode, offset) of the index read so far
         self._load()
 
     # -- reading ------------------------------------------------------------------------------
@@ -201,6 +213,8 @@ class ResultStore:
                 self.records[rec["key"]] = rec
             if bad:
                 self._set_aside(good, bad)
+            st = os.stat(self.index)  # after a set-aside, the index of the good lines
+            self._read_to = (st.st_ino, st.st_size)
 
     def _set_aside(self, good: list[bytes], bad: list[tuple[int, bytes, str]]) -> None:
         """Move the skipped lines to tasks.rejected.jsonl (appended, byte for byte) and replace
@@ -222,6 +236,60 @@ class ResultStore:
                 f"{self.index} line {number}: {why}: skipped ({where}); its run, if it is "
                 "needed, is computed again"
             )
+
+    def refresh(self) -> set[str]:
+        """Read the records that other commands appended since this store was opened or last
+        refreshed, each checked like the others (a bad one is left for the next opener to
+        report); the keys of the new ones."""
+        with locked(self.directory / LOCK):
+            if not os.path.lexists(self.index):
+                return set()
+            fd = open_regular(self.index, os.O_RDONLY)
+            try:
+                st = os.fstat(fd)
+                inode, offset = self._read_to
+                start = offset if st.st_ino == inode and st.st_size >= offset else 0
+                data = os.pread(fd, st.st_size - start, start)
+            finally:
+                os.close(fd)
+            self._read_to = (st.st_ino, start + len(data))
+        new: set[str] = set()
+        for line in data.splitlines(keepends=True):
+            try:
+                key = json.loads(line).get("key")
+            except (ValueError, RecursionError, AttributeError):
+                continue
+            rec = None if key in self.records else self._check(line, last=False)[0]
+            if rec is not None:
+                self.records[rec["key"]] = rec
+                new.add(rec["key"])
+        return new
+
+    @contextmanager
+    def claimed(self, keys: Sequence[str]) -> Iterator[set[str]]:
+        """Claim, for the block, those of `keys` that no other live command has claimed (module
+        docstring), and yield them: the others are another command's to compute (wait for them
+        with `refresh`). Without POSIX file locks every key is yielded."""
+        try:
+            import fcntl
+        except ImportError:  # pragma: no cover - not POSIX
+            yield set(keys)
+            return
+        claims = own_directory(self.directory / CLAIMS)
+        path = claims / f"{os.getpid()}-{secrets.token_hex(4)}.json"
+        with locked(self.directory / LOCK):
+            taken = _claimed_by_others(claims)
+            mine = [k for k in keys if k not in taken]
+            fd = open_regular(path, os.O_RDWR | os.O_CREAT | os.O_EXCL) if mine else -1
+            if mine:
+                fcntl.flock(fd, fcntl.LOCK_EX)  # held while this process lives
+                os.write(fd, json.dumps({"pid": os.getpid(), "keys": mine}).encode())
+        try:
+            yield set(mine)
+        finally:
+            if mine:
+                path.unlink(missing_ok=True)
+                os.close(fd)
 
     def __contains__(self, key: str) -> bool:
         return key in self.records
@@ -315,3 +383,37 @@ class ResultStore:
             raise
         except (OSError, ValueError, zipfile.BadZipFile) as exc:
             raise ValueError(f"{path}: cannot be read ({exc}); run the command again") from None
+
+
+def _claimed_by_others(claims: Path) -> set[str]:
+    """The keys in the claims of other live commands (call with the store's lock held); a claim
+    whose command has ended (its lock is free) is removed, one that is not a claim ignored."""
+    import fcntl
+
+    taken: set[str] = set()
+    for entry in sorted(os.listdir(claims)):
+        path = claims / entry
+        if not _CLAIM.match(entry) or not is_regular(path):
+            continue
+        fd = open_regular(path, os.O_RDONLY)
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            except BlockingIOError:  # its command runs
+                taken |= _claim_keys(os.pread(fd, 1 << 26, 0))
+                continue
+            path.unlink(missing_ok=True)
+        finally:
+            os.close(fd)
+    return taken
+
+
+def _claim_keys(data: bytes) -> set[str]:
+    """The keys of a claim file's contents (none if it is not one)."""
+    try:
+        keys = json.loads(data).get("keys")
+    except (ValueError, RecursionError, AttributeError):
+        return set()
+    if not isinstance(keys, list):
+        return set()
+    return {k for k in keys if isinstance(k, str) and _KEY.match(k)}
