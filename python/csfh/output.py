@@ -96,7 +96,7 @@ def replace_file(path: Path, data: bytes) -> Path:
     path = check_target(Path(path))
     tmp = temporary_name(path)
     try:
-        tmp.unlink(missing_ok=True)  # one of a killed process of the same id: never written through
+        tmp.unlink(missing_ok=True)  # a leftover or a planted link: removed, not written through
         with os.fdopen(open_regular(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb") as fh:
             fh.write(data)
             fh.flush()

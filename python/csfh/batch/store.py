@@ -194,11 +194,11 @@ class ResultStore:
 
     def _load(self) -> None:
         own_directory(self.directory / SIGNALS, create=False)
-        if not os.path.lexists(self.index):
-            return
         with locked(self.directory / LOCK):
             remove_stale_temporaries(self.directory, {INDEX, REJECTED})
             remove_stale_temporaries(self.directory / SIGNALS)
+            if not os.path.lexists(self.index):
+                return
             lines = read_regular(self.index).splitlines(keepends=True)
             good: list[bytes] = []
             bad: list[tuple[int, bytes, str]] = []
