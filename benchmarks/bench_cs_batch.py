@@ -17,7 +17,7 @@ a different sample of the file's tolerances (contact radii, flexure height, radi
   and `csfh shock` run in each worker), with the Python set-up and the summaries.
 * batched, end to end: `run_tasks` serially into a result store (keys, the store's appends).
 
-Targets (issue 17): >= 100x the per-run path's runs per second, and >= 300 runs per second per
+Targets: >= 100x the per-run path's runs per second, and >= 300 runs per second per
 core. The ratio is reported against both per-run paths. The machine may be shared: each figure
 is the best of three repetitions.
 

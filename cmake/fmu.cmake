@@ -16,7 +16,7 @@
 #   csfh_add_test_importer(TARGET SOURCES ... [LINK ...])
 #       a C importer (an executable that loads FMU binaries, portable between POSIX and Windows):
 #       built by the host build and by every cross build, so the same importer runs the FMU of
-#       each platform (win64: under wine, tests/python/test_platforms.py)
+#       each platform (win64: under wine, tests/fmu/test_platforms.py)
 #   csfh_add_fmu_package(NAME ...)   build/<NAME>.fmu, see below
 #   csfh_add_fmu3_package(NAME ...)  build/fmi3/<NAME>.fmu, the FMI 3.0 build, see below
 
@@ -181,8 +181,7 @@ function(csfh_add_fmu_package name)
             --source-files ${source_names}
     COMMAND Python3::Interpreter ${PROJECT_SOURCE_DIR}/modelDescription/document.py
             --version ${PROJECT_VERSION} ${variables} ${dir}/index.html
-    DEPENDS ${variables} ${PROJECT_SOURCE_DIR}/modelDescription/generate.py
-            ${PROJECT_SOURCE_DIR}/modelDescription/document.py
+    DEPENDS ${variables} ${CSFH_GENERATOR}
             ${PROJECT_SOURCE_DIR}/python/csfh/_version.py
     COMMENT "Generating the packaged modelDescription.xml and documentation of ${name}.fmu"
     VERBATIM)
@@ -233,8 +232,7 @@ function(csfh_add_fmu3_package name)
             --epoch ${CSFH_SOURCE_DATE_EPOCH}
     COMMAND Python3::Interpreter ${PROJECT_SOURCE_DIR}/modelDescription/document.py
             --version ${PROJECT_VERSION} ${variables} ${dir}/index.html
-    DEPENDS ${variables} ${PROJECT_SOURCE_DIR}/modelDescription/generate.py
-            ${PROJECT_SOURCE_DIR}/modelDescription/document.py
+    DEPENDS ${variables} ${CSFH_GENERATOR}
             ${PROJECT_SOURCE_DIR}/python/csfh/_version.py
     COMMENT "Generating the FMI 3.0 modelDescription.xml and documentation of fmi3/${name}.fmu"
     VERBATIM)

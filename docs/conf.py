@@ -25,13 +25,14 @@ extensions = [
     "myst_parser",
     "sphinx.ext.autodoc",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax copied into the build: no CDN, formulas render offline
 ]
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 root_doc = "index"
 exclude_patterns = ["_build", "**/README.md"]
 myst_enable_extensions = ["dollarmath", "amsmath"]
 myst_heading_anchors = 3
-suppress_warnings = ["myst.header"]  # generated reports (docs/sweep) skip heading levels
+suppress_warnings = ["myst.header"]  # generated reports (docs/reports/sweep) skip heading levels
 default_role = "literal"  # `name` in docstrings is code
 
 autodoc_member_order = "bysource"

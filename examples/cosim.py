@@ -4,7 +4,8 @@ A plain fixed-step master loop over fmpy's FMU2Slave couples the two FMUs as any
 (libcosim, a SSP tool, your own loop): each communication step the master sets the drive voltage
 and the hinge's rotation on the actuator, passes the actuator's force and moment to the hinge's
 inputs F_ext[1], F_ext[2], M_ext, and steps both (actuator first: Gauss-Seidel ordering). The
-hinge integrates with CVODE inside fmi2DoStep and locates every contact inside the step.
+hinge integrates with its own integrator inside fmi2DoStep (solver.method auto: RK45, BDF
+where stiff) and locates every contact inside the step.
 
 The scenario is the built-in `combdrive` scene: 333 V carry body 1's weight, a ramp to 500 V
 drives it into the top of the bore. At the end the same coupling is run by the harness

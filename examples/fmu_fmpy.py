@@ -2,13 +2,15 @@
 
 A central drop without flexure or friction (the paper's Section 6.1): body 1 falls from
 y = 0.01 m onto the bore (clearance 0.02 m) and bounces. The script simulates it by model
-exchange (fmpy's CVode calls the FMU; the gap is the event indicator) and by co-simulation (CVODE
-inside the FMU), and checks the first contact against free fall: t = sqrt(2 * 0.03 m / g).
+exchange (fmpy's CVode calls the FMU; the gap is the event indicator) and by co-simulation (the
+FMU's own integrator, solver.method auto: RK45, BDF where stiff), and checks the first contact
+against free fall: t = sqrt(2 * 0.03 m / g).
 
-    python3 examples/fmu_fmpy.py [path/to/csfh.fmu]
+    python3 examples/fmu_fmpy.py "$(python3 -c 'import csfh; print(csfh.fmu_path())')"
 
-The FMU is the argument, else $CSFH_FMU, else build/csfh.fmu of this source tree (any other
-importer works the same way: load csfh.fmu, set the start values below, simulate).
+The FMU is the argument (the installed package's copy, as above; `csfh info` prints it too), else
+$CSFH_FMU, else build/csfh.fmu of a CMake build of this tree. Any other importer works the same
+way: load csfh.fmu, set the start values below, simulate.
 """
 
 from __future__ import annotations
@@ -38,7 +40,10 @@ def find_fmu() -> str:
         return os.environ["CSFH_FMU"]
     path = Path(__file__).resolve().parent.parent / "build" / "csfh.fmu"
     if not path.exists():
-        sys.exit(f"{path} not found: build it (cmake -S . -B build && cmake --build build)")
+        sys.exit(
+            "no FMU given: pass its path, e.g. the installed package's "
+            "(python3 -c 'import csfh; print(csfh.fmu_path())'), or set $CSFH_FMU"
+        )
     return str(path)
 
 

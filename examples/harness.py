@@ -30,7 +30,7 @@ def main() -> None:
 
     runs = [
         csfh.simulate(scene, "LN_spheres", stop_time=0.3),  # model exchange (fmpy's CVode)
-        csfh.simulate(scene, "LN_cylinders", stop_time=0.3, interface="cs"),  # CVODE in the FMU
+        csfh.simulate(scene, "LN_cylinders", stop_time=0.3, interface="cs"),  # the FMU's integrator
         csfh.moreau(scene, stop_time=0.3),  # Moreau midpoint stepper, h = 1e-5 s
     ]
     for run in runs:

@@ -37,9 +37,9 @@ The list (TOML):
     file = "fmu_src/solvers/csfh_moreau.c"
     search = "1.0 / m->p.I1}"
     replace = "1.0 / m->p.m1}"
-    why = "issue 21: the rotation must use the inertia"
+    why = "the rotation must use the inertia"
     each_layer = true
-    tests = { C = ["test_moreau"], Python = ["tests/python/test_harness.py::test_x"] }
+    tests = { C = ["test_moreau"], Python = ["tests/package/test_moreau.py::test_x"] }
 
 In commands: {python} is this interpreter, {jobs} the build parallelism (--jobs), {source} the
 source tree (e.g. for a download cache kept there), {tests} the mutant's tests for that runner

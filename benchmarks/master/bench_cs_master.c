@@ -17,7 +17,7 @@
  * The headers are fmpy's FMI 2.0 headers, as for the FMU itself; the binary is loaded with the
  * masters' shared loader (fmu_src/masters/fmi2_api.h). Portable C11: POSIX (clock_gettime) or
  * Windows (QueryPerformanceCounter), so the same master runs the win64 binary (cross-built by
- * cmake/platforms.cmake, run under wine in tests/python/test_platforms.py). */
+ * cmake/platforms.cmake, run under wine in tests/fmu/test_platforms.py). */
 #if defined(_WIN32)
 #include <windows.h>
 #else

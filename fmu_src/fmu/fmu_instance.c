@@ -93,7 +93,7 @@ fmu_instance_t *fmu_instance_new(const char *instance_name, fmu_kind_t type, int
     }
     fmu_model.set_defaults(inst->model);
     inst->state = FMU_INSTANTIATED;
-    inst->tolerance = FMU_DEFAULT_TOLERANCE;
+    inst->tolerance = fmu_model.default_tolerance;
     return inst;
 }
 
@@ -118,7 +118,7 @@ void fmu_instance_reset(fmu_instance_t *inst)
     fmu_model.set_defaults(inst->model);
     inst->prepared = 0;
     inst->warned_outputs = 0;
-    inst->tolerance = FMU_DEFAULT_TOLERANCE;
+    inst->tolerance = fmu_model.default_tolerance;
     inst->start_time = 0.0;
     inst->stop_time_defined = 0;
     inst->warned_time = 0;

@@ -85,10 +85,6 @@ typedef void (*fmu_callback_t)(void);
 /* The size of every message the instance formats. */
 #define FMU_MSG_SIZE 512
 
-/* Relative tolerance of the co-simulation integrator when the importer defines none (also the
- * DefaultExperiment tolerance of modelDescription.xml). */
-#define FMU_DEFAULT_TOLERANCE 1e-6
-
 struct fmu_instance {
     void *model;            /* the model struct, fmu_model.size bytes */
     fmu_kind_t type;

@@ -72,6 +72,8 @@ typedef struct {
     int n_event_indicators;    /* 0 or more */
     int n_variables;
     const csfh_variable_t *variables; /* the generated table */
+    double default_tolerance;  /* relative tolerance when fmi2SetupExperiment gives none (the
+                                  [default_experiment] tolerance: <prefix>_constants.h) */
     size_t size;               /* sizeof the model struct */
     size_t time_offset;        /* double time */
     size_t x_offset;           /* double x[n_states] */

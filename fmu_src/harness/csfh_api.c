@@ -7,14 +7,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "csfh_constants.h"
 #include "csfh_moreau_batch.h"
 #include "csfh_variables.h"
 
-#define CSFH_ABI_VERSION 2 /* 2: csfh_api_moreau_batch (csfh_moreau_batch.h) */
-
 int csfh_api_abi_version(void)
 {
-    return CSFH_ABI_VERSION;
+    return CSFH_CORE_ABI_VERSION; /* [abi] of variables.toml, as csfh.model.core expects */
 }
 
 size_t csfh_api_model_size(void)
@@ -43,27 +42,6 @@ csfh_fmu_t *csfh_api_clone(const csfh_fmu_t *model)
         *c = *model;
     }
     return c;
-}
-
-int csfh_api_variable_count(void)
-{
-    return CSFH_NUMBER_OF_VARIABLES;
-}
-
-const char *csfh_api_variable_name(int index)
-{
-    return index >= 0 && index < CSFH_NUMBER_OF_VARIABLES ? csfh_variables[index].name : NULL;
-}
-
-int csfh_api_variable_type(int index)
-{
-    return index >= 0 && index < CSFH_NUMBER_OF_VARIABLES ? (int)csfh_variables[index].type : -1;
-}
-
-int csfh_api_variable_causality(int index)
-{
-    return index >= 0 && index < CSFH_NUMBER_OF_VARIABLES ? (int)csfh_variables[index].causality
-                                                          : -1;
 }
 
 int csfh_api_set(csfh_fmu_t *model, const char *name, double value, char *msg, size_t msg_size)

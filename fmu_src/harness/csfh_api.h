@@ -28,12 +28,6 @@ CSFH_API csfh_fmu_t *csfh_api_new(void);
 CSFH_API void csfh_api_free(csfh_fmu_t *model);
 CSFH_API csfh_fmu_t *csfh_api_clone(const csfh_fmu_t *model);
 
-/* Variable table. Type codes: 0 Real, 1 Integer, 2 Boolean, 3 Enumeration. */
-CSFH_API int csfh_api_variable_count(void);
-CSFH_API const char *csfh_api_variable_name(int index);
-CSFH_API int csfh_api_variable_type(int index);
-CSFH_API int csfh_api_variable_causality(int index);
-
 /* Set by name (with the FMU's range check); returns 0, or -1 with a message naming the variable
  * and the value, or -2 for an unknown name. */
 CSFH_API int csfh_api_set(csfh_fmu_t *model, const char *name, double value, char *msg,

@@ -7,10 +7,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "csfh_constants.h"
 #include "fmi2_api.h"
 #include "fmu_library.h"
 
-#define ABI_VERSION 2 /* 2: csfh_cs_steps */
 #define MAX_OUT 64 /* outputs per run */
 
 /* ------------------------------------------------------------------------------------------ */
@@ -415,5 +415,5 @@ long long csfh_cs_batch_run(const csfh_cs_batch_spec_t *spec, size_t n_runs, con
 
 int csfh_cs_batch_abi_version(void)
 {
-    return ABI_VERSION;
+    return CSFH_BATCH_ABI_VERSION; /* [abi] of variables.toml, as csfh.runners.cs_steps expects */
 }

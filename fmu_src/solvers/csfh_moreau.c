@@ -4,15 +4,17 @@
 #include <string.h>
 
 #include "csfh_common.h"
+#include "csfh_constants.h"
 #include "csfh_flexure.h"
 
 void csfh_moreau_default_options(csfh_moreau_options_t *o)
 {
-    o->h = 1e-5;                    /* paper, section 6 */
+    /* the harness's defaults ([harness] of variables.toml) */
+    o->h = CSFH_MOREAU_STEP;
     o->stick_rule = CSFH_STICK_PAPER;
-    o->v_eps = 0.0;                 /* restitution on every closing step (drift stabiliser, 6.3) */
-    o->v_stick = 1e-9;
-    o->g_tol = 0.0;
+    o->v_eps = CSFH_MOREAU_V_EPS;
+    o->v_stick = CSFH_MOREAU_V_STICK;
+    o->g_tol = CSFH_MOREAU_G_TOL;
 }
 
 /* Solve the one-contact problem for Lambda given G (2x2 SPD), c = gamma_free + [eps gamma_A,N, 0]

@@ -13,7 +13,7 @@ the Moreau time stepper, comparisons and reports on top.
 
 The model itself is documented in ``docs/model.md``.
 
-The package, by role (each layer imports only the ones below it; tests/python/test_layout.py
+The package, by role (each layer imports only the ones below it; tests/tools/test_layout.py
 checks it):
 
 * ``csfh.cli``: the command line;

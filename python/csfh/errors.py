@@ -16,10 +16,23 @@ class SimulationError(RuntimeError):
     """The integration failed; the message says where and why."""
 
 
+class ResultsError(ValueError):
+    """A results folder that csfh refuses to use as it is (a state file changed by hand or by
+    another program, a path leading out of the folder, a special file where a result goes); the
+    message names the file."""
+
+
+class BatchError(RuntimeError):
+    """Batched runs that cannot go on (a Dask scheduler that went away or has no worker that
+    runs the tasks); the message names the executor. Finished runs are kept."""
+
+
 USER_ERRORS: tuple[type[BaseException], ...] = (
     SceneError,
     ParameterError,
     SimulationError,
+    ResultsError,
+    BatchError,
     FileNotFoundError,
     ValueError,
     FloatingPointError,

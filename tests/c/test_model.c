@@ -632,7 +632,7 @@ static void test_energy_conservation(void)
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* issue 14: the start-state check, the peak quantities, the Integer twins of the Enumerations */
+/* the start-state check, the peak quantities, the Integer twins of the Enumerations */
 static void test_start_check_peaks_and_numbers(void)
 {
     csfh_fmu_t fmu;

@@ -1,4 +1,4 @@
-/* FMU states and their owner (issue 15, item 4), under ASan + UBSan + LeakSanitizer: states the
+/* FMU states and their owner, under ASan + UBSan + LeakSanitizer: states the
  * importer never freed are freed by fmi2FreeInstance (LeakSanitizer reports any leak at exit and
  * the test fails), fmi2Reset keeps them usable, and the FMU-state functions refuse a pointer that
  * is not one of this instance's live states (freed, another instance's, never made) without

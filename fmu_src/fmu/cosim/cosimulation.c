@@ -23,7 +23,7 @@
  * a changed state or tunable parameter, and fmi2Get/SetFMUstate restart the integrator at the
  * communication point, so that its history never reaches across a discontinuity of the
  * right-hand side. Tolerances: relative = the fmi2SetupExperiment tolerance
- * (FMU_DEFAULT_TOLERANCE = 1e-6 when none is given), absolute = relative x the nominal value of
+ * (fmu_model.default_tolerance when none is given), absolute = relative x the nominal value of
  * each state.
  *
  * A failure of the integrator returns FMU_ERROR with its own message and return flag in the

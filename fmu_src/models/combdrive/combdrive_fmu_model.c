@@ -2,6 +2,7 @@
  * states, no events; the outputs follow the inputs (direct feedthrough). */
 #include <stdio.h>
 
+#include "combdrive_constants.h"
 #include "combdrive_model.h"
 #include "combdrive_variables.h"
 #include "fmu_model.h"
@@ -37,6 +38,7 @@ const fmu_model_t fmu_model = {
     .n_event_indicators = COMBDRIVE_NUMBER_OF_EVENT_INDICATORS,
     .n_variables = COMBDRIVE_NUMBER_OF_VARIABLES,
     .variables = combdrive_variables,
+    .default_tolerance = COMBDRIVE_DEFAULT_TOLERANCE,
     .size = sizeof(combdrive_model_t),
     .time_offset = offsetof(combdrive_model_t, time),
     .x_offset = offsetof(combdrive_model_t, time), /* no states */

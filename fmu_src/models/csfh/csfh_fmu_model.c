@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdio.h>
 
+#include "csfh_constants.h"
 #include "csfh_fmu.h"
 #include "csfh_peaks.h"
 #include "csfh_variables.h"
@@ -172,6 +173,7 @@ const fmu_model_t fmu_model = {
     .n_event_indicators = CSFH_NUMBER_OF_EVENT_INDICATORS,
     .n_variables = CSFH_NUMBER_OF_VARIABLES,
     .variables = csfh_variables,
+    .default_tolerance = CSFH_DEFAULT_TOLERANCE,
     .size = sizeof(csfh_fmu_t),
     .time_offset = offsetof(csfh_fmu_t, m.time),
     .x_offset = offsetof(csfh_fmu_t, m.x),

@@ -1,8 +1,9 @@
 """What every command of the command line shares: the one-line error, the help layout (every
 command has a description, every option its default), argument types and the output directory.
 
-Command modules import only the standard library and this module at their top; everything else
-is imported inside the command, so that `csfh --help` starts in a fraction of a second."""
+Command modules import only the standard library and this module at their top (which takes the
+built-in scenes' names from csfh.scenes, a tuple); everything else is imported inside the
+command, so that `csfh --help` starts in a fraction of a second."""
 
 from __future__ import annotations
 
@@ -12,7 +13,9 @@ import textwrap
 from pathlib import Path
 from typing import Any
 
-SCENE_HELP = "built-in scene (central, asymmetric, csfh, mems) or the path of a .toml scene file"
+from ..scenes import BUILTIN_SCENES
+
+SCENE_HELP = f"built-in scene ({', '.join(BUILTIN_SCENES)}) or the path of a .toml scene file"
 
 
 class CliError(Exception):

@@ -1,6 +1,6 @@
 """csfh: dynamics of a Conjugate-Surface Flexure Hinge with impacts and friction.
 
-Scenes are TOML files (built-in: central, asymmetric, csfh, mems). Models: the FMU's contact laws
+Scenes are TOML files (built-in: see `csfh run --help`). Models: the FMU's contact laws
 LN_spheres, LN_cylinders, LN_ESDU, HuntCrossley, Flores (event-driven) and Moreau.
 `csfh COMMAND --help` describes each command."""
 

@@ -199,6 +199,7 @@ def _run(
     from ..batch.executors import run_tasks
     from ..batch.store import ResultStore
     from ..model import model_info
+    from ..model._csfh_variables import MAX_COMMUNICATION_POINTS
     from ..model.scene import load_scene
     from ..output import output_set
     from ..studies.shock import report, study
@@ -223,10 +224,10 @@ def _run(
         stop_time=stop_time,
         step=step or STEP_FACTOR * scene.integrator.output_interval,
     )
-    if spec.stop_time / spec.step > 5e6:
+    if spec.stop_time / spec.step > MAX_COMMUNICATION_POINTS:
         raise CliError(
-            f"{spec.stop_time:g} s in steps of {spec.step:g} s are more than 5e6 communication "
-            "points: give a larger --step"
+            f"{spec.stop_time:g} s in steps of {spec.step:g} s are more than "
+            f"{MAX_COMMUNICATION_POINTS:g} communication points: give a larger --step"
         )
     tol = None
     if args.tolerance is not None:

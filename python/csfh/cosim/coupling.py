@@ -13,11 +13,11 @@ The coupling (the same in both engines):
     csfh.body1.theta                  -> combdrive.theta     (moment = true)
 
 Ordering. Both FMUs advance with a fixed communication step h; inputs are held constant over a
-step (zero-order hold; the csfh FMU restarts CVODE when an input changes).
+step (zero-order hold; the csfh FMU restarts its integrator when an input changes).
 
 * Jacobi (default): every FMU steps from t_k to t_k+1 with the inputs it holds at t_k; outputs are
   exchanged after all have stepped. This is libcosim's fixed-step algorithm, so the two engines
-  compute the same thing and agree to round-off (tests/python/test_cosim.py). The actuator is
+  compute the same thing and agree to round-off (tests/package/test_cosim.py). The actuator is
   algebraic (direct feedthrough), so the hinge sees during [t_k, t_k+1] the force of V(t_k-1),
   theta(t_k-1): one communication step of delay.
 * Gauss-Seidel (fmpy engine only): at t_k the actuator is evaluated first, with V(t_k) and the
@@ -115,8 +115,9 @@ def make_trajectory(
     model = f"cosim-{s.engine}" + ("" if s.engine == "libcosimpy" else f"-{s.ordering}")
     tr = Trajectory(model=model, scene=scene.name, table=table, contacts=onsets)
     tr.stats = {
-        "integrator": f"CVODE inside the csfh FMU, rtol={s.tolerance or DEFAULT_TOLERANCE:g}"
-        f"; {s.engine} master, {s.ordering}, communication step {s.step:g} s",
+        "integrator": "the csfh FMU's own integrator (solver.method), "
+        f"rtol={s.tolerance or DEFAULT_TOLERANCE:g}; {s.engine} master, {s.ordering}, "
+        f"communication step {s.step:g} s",
         **stats,
     }
     return tr

@@ -1,32 +1,33 @@
 """The comb-drive actuator FMU (`combdrive.fmu`, modelDescription/combdrive.toml): its
-parameters, and their validation by the FMU itself (ranges, finiteness) for the [cosim.actuator]
-table of a scene."""
+parameters, and their validation for the [cosim.actuator] table of a scene: types and ranges
+from the generated interface (csfh.model._combdrive_variables, no binary needed), then, where the
+FMU is built, the FMU's own checks."""
 
 from __future__ import annotations
 
 from typing import Any
 
-from ..errors import SceneError
+from ..errors import ParameterError, SceneError
 from ..paths import combdrive_fmu_path
+from ._combdrive_variables import INTERFACE
 from .fmus import Slave, description
+from .interface import Variable
 
 
 def actuator_description() -> Any:
-    """The comb-drive FMU's model description (fmpy's ModelDescription)."""
+    """The built comb-drive FMU's model description (fmpy's ModelDescription)."""
     return description(str(combdrive_fmu_path()))
 
 
-def actuator_parameters() -> dict[str, Any]:
-    """The comb-drive FMU's parameters (name -> ModelVariable)."""
-    md = actuator_description()
-    return {v.name: v for v in md.modelVariables if v.causality == "parameter"}
+def actuator_parameters() -> dict[str, Variable]:
+    """The comb-drive FMU's parameters by name."""
+    return {v.name: v for v in INTERFACE.select("parameter")}
 
 
 def check_actuator(values: dict[str, Any]) -> dict[str, float | int]:
-    """Type-check the actuator parameters and let the comb-drive FMU validate them (ranges,
-    finiteness): its own message becomes the scene error."""
-    from fmpy.fmi1 import FMICallException
-
+    """Type- and range-check the actuator parameters (SceneError naming the key), then let the
+    comb-drive FMU validate them, where it is built (derived quantities): its own message
+    becomes the scene error."""
     params = actuator_parameters()
     out: dict[str, float | int] = {}
     for name, value in values.items():
@@ -38,11 +39,26 @@ def check_actuator(values: dict[str, Any]) -> dict[str, float | int]:
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise SceneError(f"cosim.actuator.{name} = {value!r} must be a number")
             out[name] = float(value)
-    slave = Slave(str(combdrive_fmu_path()), "combdrive")
+        try:
+            INTERFACE.check(name, out[name])
+        except ParameterError as exc:
+            raise SceneError(f"cosim.actuator: {exc}") from None
+    try:
+        path = str(combdrive_fmu_path())
+    except FileNotFoundError:
+        return out  # no build: the FMU makes the same checks when a co-simulation starts
+    _check_in_fmu(path, out)
+    return out
+
+
+def _check_in_fmu(path: str, values: dict[str, float | int]) -> None:
+    from fmpy.fmi1 import FMICallException
+
+    slave = Slave(path, "combdrive")
     try:
         slave.fmu.setupExperiment(startTime=0.0)
         slave.fmu.enterInitializationMode()
-        slave.set(out)
+        slave.set(values)
         slave.fmu.exitInitializationMode()
     except FMICallException as exc:
         detail = slave.log.errors[-1] if slave.log.errors else str(exc)
@@ -50,4 +66,3 @@ def check_actuator(values: dict[str, Any]) -> dict[str, float | int]:
         raise SceneError(f"cosim.actuator: {detail}") from None
     finally:
         slave.free()
-    return out

@@ -1,24 +1,25 @@
 """ctypes binding to libcsfh_core: the same C physics as the FMU, addressed by the FMU's variable
 names. Used by the Moreau stepper and by anything that needs the model's right-hand side without
-the FMI layer."""
+the FMI layer. Only computation goes through ctypes: what the variables are is the generated
+interface's (csfh.model.model_info)."""
 
 from __future__ import annotations
 
 import ctypes
 from ctypes import POINTER, c_char_p, c_double, c_int, c_longlong, c_size_t, c_void_p
-from dataclasses import dataclass
 from functools import cache
 
 import numpy as np
 
 from ..errors import ParameterError
 from ..paths import core_library_path
+from ._csfh_variables import CORE_ABI_VERSION as ABI_VERSION
+from ._csfh_variables import INTERFACE
 
-ABI_VERSION = 2  # 2: csfh_api_moreau_batch (moreau_batch.py)
 _MSG = 512
 _dp = POINTER(c_double)
-
-TYPE_REAL, TYPE_INTEGER, TYPE_BOOLEAN, TYPE_ENUMERATION = range(4)
+N_STATES = len(INTERFACE.states)
+N_INPUTS = 3  # csfh_api_set_inputs: F_ext[1], F_ext[2], M_ext
 
 
 @cache
@@ -29,10 +30,6 @@ def library() -> ctypes.CDLL:
         "csfh_api_new": (c_void_p, []),
         "csfh_api_free": (None, [c_void_p]),
         "csfh_api_clone": (c_void_p, [c_void_p]),
-        "csfh_api_variable_count": (c_int, []),
-        "csfh_api_variable_name": (c_char_p, [c_int]),
-        "csfh_api_variable_type": (c_int, [c_int]),
-        "csfh_api_variable_causality": (c_int, [c_int]),
         "csfh_api_set": (c_int, [c_void_p, c_char_p, c_double, c_char_p, c_size_t]),
         "csfh_api_get": (c_int, [c_void_p, c_char_p, _dp]),
         "csfh_api_prepare": (c_int, [c_void_p, c_char_p, c_size_t]),
@@ -101,26 +98,6 @@ def library() -> ctypes.CDLL:
     return lib
 
 
-@dataclass(frozen=True)
-class VariableInfo:
-    name: str
-    type: int
-    causality: int
-
-
-@cache
-def variables() -> dict[str, VariableInfo]:
-    """The model's variables (the generated table, the same as modelDescription.xml)."""
-    lib = library()
-    out = {}
-    for i in range(lib.csfh_api_variable_count()):
-        name = lib.csfh_api_variable_name(i).decode()
-        out[name] = VariableInfo(
-            name, lib.csfh_api_variable_type(i), lib.csfh_api_variable_causality(i)
-        )
-    return out
-
-
 def _ptr(a: np.ndarray) -> ctypes._Pointer:
     return a.ctypes.data_as(_dp)
 
@@ -167,24 +144,26 @@ class CoreModel:
 
     @property
     def state(self) -> np.ndarray:
-        x = np.empty(6)
+        x = np.empty(N_STATES)
         self._lib.csfh_api_get_state(self._h, _ptr(x))
         return x
 
     @state.setter
     def state(self, x: np.ndarray) -> None:
         x = np.ascontiguousarray(x, dtype=float)
-        if x.shape != (6,):
-            raise ValueError("the state has 6 components [x, y, theta, vx, vy, omega]")
+        if x.shape != (N_STATES,):
+            raise ValueError(f"the state has {N_STATES} components [x, y, theta, vx, vy, omega]")
         self._lib.csfh_api_set_state(self._h, _ptr(x))
 
     def set_inputs(self, u: np.ndarray) -> None:
         u = np.ascontiguousarray(u, dtype=float)
+        if u.shape != (N_INPUTS,):
+            raise ValueError(f"the inputs are {N_INPUTS} values [F_ext[1], F_ext[2], M_ext]")
         self._lib.csfh_api_set_inputs(self._h, _ptr(u))
 
     def derivatives(self, x: np.ndarray) -> np.ndarray:
         x = np.ascontiguousarray(x, dtype=float)
-        xdot = np.empty(6)
+        xdot = np.empty(N_STATES)
         status = self._lib.csfh_api_derivatives(self._h, _ptr(x), _ptr(xdot))
         if status < 0:
             raise FloatingPointError(f"non-finite derivative at x = {x.tolist()}")

@@ -7,10 +7,12 @@ Scene section (all keys optional except the voltage ramp):
 
     [cosim]
     engine = "fmpy"              # or "libcosimpy"
-    step = 1e-4                  # s, communication step (libcosimpy: a whole number of ns)
+    step = 1e-4                  # s, communication step (libcosimpy: a whole number of ns;
+                                 # default: the harness's output interval)
     ordering = "jacobi"          # fmpy engine: "jacobi" (as libcosim) or "gauss-seidel"
-    tolerance = 1e-6             # relative tolerance of CVODE inside the csfh FMU (fmpy engine;
-                                 # libcosim sets none, so the FMU's default 1e-6 applies)
+    tolerance = 1e-6             # relative tolerance inside the csfh FMU (fmpy engine;
+                                 # libcosim sets none, so the FMU's default DEFAULT_TOLERANCE
+                                 # applies)
     moment = true                # connect M -> M_ext and body1.theta -> theta
 
     [cosim.actuator]             # comb-drive parameters by FMU name (combdrive.toml)
@@ -42,12 +44,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..errors import SceneError
+from ._csfh_variables import DEFAULT_TOLERANCE, OUTPUT_INTERVAL
 from .actuator import actuator_parameters, check_actuator
 
 ENGINES = ("fmpy", "libcosimpy")
 ORDERINGS = ("jacobi", "gauss-seidel")
-DEFAULT_TOLERANCE = 1e-6
-"""The csfh FMU's relative tolerance when fmi2SetupExperiment gives none (FMU_DEFAULT_TOLERANCE)."""
+# DEFAULT_TOLERANCE: the csfh FMU's relative tolerance when fmi2SetupExperiment gives none
 
 CONNECTIONS = (("F_x", "F_ext[1]"), ("F_y", "F_ext[2]"), ("M", "M_ext"))
 """(actuator output, csfh input)."""
@@ -76,9 +78,9 @@ class VoltageRamp:
 @dataclass(frozen=True)
 class CosimSettings:
     engine: str = "fmpy"
-    step: float = 1e-4
+    step: float = OUTPUT_INTERVAL
     ordering: str = "jacobi"
-    tolerance: float | None = None  # None: the FMU's default (1e-6)
+    tolerance: float | None = None  # None: the FMU's default (DEFAULT_TOLERANCE)
     moment: bool = True
     actuator: dict[str, float | int] = field(default_factory=dict)
     voltage: VoltageRamp = field(default_factory=VoltageRamp)
@@ -115,7 +117,7 @@ def parse_cosim(table: dict[str, Any], inputs: dict[str, float] | None = None) -
     engine = table.get("engine", "fmpy")
     if engine not in ENGINES:
         raise SceneError(f"cosim.engine = {engine!r} is not one of {', '.join(ENGINES)}")
-    step = _number("cosim.step", table.get("step", 1e-4), positive=True)
+    step = _number("cosim.step", table.get("step", OUTPUT_INTERVAL), positive=True)
     ordering = table.get("ordering", "jacobi")
     if ordering not in ORDERINGS:
         raise SceneError(f"cosim.ordering = {ordering!r} is not one of {', '.join(ORDERINGS)}")
@@ -127,17 +129,7 @@ def parse_cosim(table: dict[str, Any], inputs: dict[str, float] | None = None) -
     moment = table.get("moment", True)
     if not isinstance(moment, bool):
         raise SceneError(f"cosim.moment = {moment!r} must be true or false")
-    if "voltage" not in table:
-        raise SceneError("[cosim.voltage] is missing (keys V0, V1, t0, t1)")
-    ramp = _keys("[cosim.voltage]", table["voltage"], _RAMP_KEYS)
-    missing = sorted(_RAMP_KEYS - set(ramp))
-    if missing:
-        raise SceneError(f"[cosim.voltage]: key {missing[0]!r} is missing (V0, V1, t0, t1)")
-    v = {k: _number(f"cosim.voltage.{k}", ramp[k]) for k in ("V0", "V1", "t0", "t1")}
-    if v["t0"] < 0:
-        raise SceneError(f"cosim.voltage.t0 = {v['t0']} must be >= 0")
-    if not v["t1"] > v["t0"]:
-        raise SceneError(f"cosim.voltage.t1 = {v['t1']} must be greater than t0 = {v['t0']}")
+    voltage = _voltage(table)
     actuator = check_actuator(
         dict(_keys("[cosim.actuator]", table.get("actuator", {}), set(actuator_parameters())))
     )
@@ -154,10 +146,26 @@ def parse_cosim(table: dict[str, Any], inputs: dict[str, float] | None = None) -
         tolerance=tolerance,
         moment=moment,
         actuator=actuator,
-        voltage=VoltageRamp(**v),
+        voltage=voltage,
     )
     check_engine(settings)
     return settings
+
+
+def _voltage(table: dict[str, Any]) -> VoltageRamp:
+    """[cosim.voltage]: every key given, t1 > t0 >= 0."""
+    if "voltage" not in table:
+        raise SceneError("[cosim.voltage] is missing (keys V0, V1, t0, t1)")
+    ramp = _keys("[cosim.voltage]", table["voltage"], _RAMP_KEYS)
+    missing = sorted(_RAMP_KEYS - set(ramp))
+    if missing:
+        raise SceneError(f"[cosim.voltage]: key {missing[0]!r} is missing (V0, V1, t0, t1)")
+    v = {k: _number(f"cosim.voltage.{k}", ramp[k]) for k in ("V0", "V1", "t0", "t1")}
+    if v["t0"] < 0:
+        raise SceneError(f"cosim.voltage.t0 = {v['t0']} must be >= 0")
+    if not v["t1"] > v["t0"]:
+        raise SceneError(f"cosim.voltage.t1 = {v['t1']} must be greater than t0 = {v['t0']}")
+    return VoltageRamp(**v)
 
 
 def check_engine(s: CosimSettings) -> None:

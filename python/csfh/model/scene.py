@@ -2,25 +2,33 @@
 the model are on, parameter overrides, constant inputs and integrator settings (the keys below).
 
 A scene is refused when it is loaded, with one line naming the file, the key and the value, when
-it leaves these limits (so that no scene exhausts the memory or runs for hours by accident):
+it leaves these limits (so that no scene exhausts the memory or runs for hours by accident; the
+run-length limits and the defaults of the keys are the [harness] and [default_experiment] tables
+of modelDescription/variables.toml, as the constants of this module):
 
 * ``name``: one plain file name (it names the output directory results/NAME): no ``/`` or
   backslash, not starting with ``.``, no control characters, at most 100 characters;
-* ``stop_time`` <= 1e4 s (every transient of the hinge decays within seconds);
-* ``output_interval`` <= ``stop_time``, and at most 1e6 output samples (``stop_time /
-  output_interval``: each is a row of the tables);
-* ``moreau_h`` <= ``stop_time`` (at least one step), and at most 1e9 Moreau steps
-  (``stop_time / moreau_h``: about 100 s of stepping);
+* ``stop_time`` <= ``MAX_STOP_TIME`` s (every transient of the hinge decays within seconds);
+* ``output_interval`` <= ``stop_time``, and at most ``MAX_OUTPUT_SAMPLES`` output samples
+  (``stop_time / output_interval``: each is a row of the tables);
+* ``moreau_h`` <= ``stop_time`` (at least one step), and at most ``MAX_MOREAU_STEPS`` Moreau
+  steps (``stop_time / moreau_h``);
 * ``rtol`` in [1e-14, 1) (tighter than 1e-14 cannot be met in double precision);
 * the initial state: speeds ``|vx|``, ``|vy|`` <= 100 m/s and ``|omega|`` <= 1000 rad/s (the
   contact laws are quasi-static: they hold for impact speeds far below these), ``|theta|`` <= pi,
   and a start in contact at most as deep as ``contact.max_initial_indentation`` (the FMU's
-  check) and 1 % of ``contact.R1`` (Hertz contact assumes indentations small against the radii).
+  check) and 1 % of ``contact.R1`` (Hertz contact assumes indentations small against the radii);
+* every parameter and input as the FMU checks it (names, types, ranges, enumeration items: the
+  generated interface, csfh.model.model_info), and the model's own checks (R1 < R2, v0 < v1,
+  derived quantities finite) and the start's depth in the C core where it is built. Loading
+  needs no binary; without the core, the FMU and the core make the model's checks and the
+  contact.max_initial_indentation check when a run sets the model up, and only the 1 % of
+  ``contact.R1`` limit is not checked.
 
     name = "csfh"
     description = "..."
     preset = "paper"            # or "consistent" (docs/model.md §9)
-    stop_time = 1.0             # s
+    stop_time = 1.0             # s (default: [default_experiment] stopTime)
     models = ["LN_spheres", "LN_cylinders", "LN_ESDU", "Moreau"]   # for `csfh compare`
 
     [initial]
@@ -38,9 +46,10 @@ it leaves these limits (so that no scene exhausts the memory or runs for hours b
     "F_ext[1]" = 0.0            # also F_ext[2], M_ext, a_base[1], a_base[2] (frame acceleration)
 
     [integrator]
-    rtol = 1e-6                 # CVode relative tolerance (event-driven models)
-    output_interval = 1e-4      # s, rows of the output tables
-    moreau_h = 1e-5             # s, Moreau step
+    rtol = 1e-6                 # CVODE's relative tolerance (event-driven models; default:
+                                # [default_experiment] tolerance, the FMU's own default)
+    output_interval = 1e-4      # s, rows of the output tables (default: [harness])
+    moreau_h = 1e-5             # s, Moreau step (default: [harness])
     stick_rule = "paper"        # Moreau: "paper" (f_a decides) or "memory"; default from preset
     v_eps = 0.0                 # Moreau: restitution only for gamma_N < -v_eps
     g_tol = 0.0                 # Moreau: contact active when the gap <= g_tol
@@ -53,27 +62,34 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from ..errors import SceneError
+from ..errors import ParameterError, SceneError
+from ..scenes import BUILTIN_SCENES
 from . import model_info
+from ._csfh_variables import (
+    DEFAULT_STOP_TIME,
+    DEFAULT_TOLERANCE,
+    MAX_MOREAU_STEPS,
+    MAX_OUTPUT_SAMPLES,
+    MAX_STOP_TIME,
+    MOREAU_G_TOL,
+    MOREAU_STEP,
+    MOREAU_V_EPS,
+    OUTPUT_INTERVAL,
+)
 from .cosim_section import parse_cosim
 from .presets import PRESETS
 
-BUILTIN_SCENES = ("central", "asymmetric", "csfh", "mems", "combdrive")  # combdrive: `csfh cosim`
 STICK_RULES = ("paper", "memory")
 
-# the limits of a scene (module docstring)
+# the limits of a scene (module docstring); MAX_STOP_TIME (s, the longest run),
+# MAX_OUTPUT_SAMPLES (the most output rows of a run: stop_time / output_interval, or / the
+# communication step) and MAX_MOREAU_STEPS (stop_time / moreau_h) are [harness] values
 MAX_NAME_LENGTH = 100
-MAX_STOP_TIME = 1e4
-"""s: the longest run."""
-MAX_OUTPUT_SAMPLES = 1_000_000
-"""The most output rows of a run (stop_time / output_interval, or / the communication step)."""
-MAX_MOREAU_STEPS = 1_000_000_000
-"""The most Moreau steps of a run (stop_time / moreau_h)."""
 MIN_RTOL = 1e-14
 """The tightest relative tolerance of CVODE."""
 MAX_SPEED = 100.0
@@ -102,12 +118,12 @@ class IntegratorSettings:
     * ``g_tol``: m, Moreau treats the contact as active when the gap is <= g_tol.
     """
 
-    rtol: float = 1e-6
-    output_interval: float = 1e-4
-    moreau_h: float = 1e-5
+    rtol: float = DEFAULT_TOLERANCE
+    output_interval: float = OUTPUT_INTERVAL
+    moreau_h: float = MOREAU_STEP
     stick_rule: str | None = None
-    v_eps: float = 0.0
-    g_tol: float = 0.0
+    v_eps: float = MOREAU_V_EPS
+    g_tol: float = MOREAU_G_TOL
 
 
 @dataclass(frozen=True)
@@ -129,7 +145,7 @@ class Scene:
     name: str
     description: str = ""
     preset: str = "paper"
-    stop_time: float = 1.0
+    stop_time: float = DEFAULT_STOP_TIME
     q0: tuple[float, float, float] = (0.0, 0.0, 0.0)
     u0: tuple[float, float, float] = (0.0, 0.0, 0.0)
     flexure: bool = True
@@ -228,7 +244,7 @@ def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
     preset = data.get("preset", "paper")
     if preset not in PRESETS:
         raise SceneError(f"preset = {preset!r} is not one of {', '.join(PRESETS)}")
-    stop_time = _number("stop_time", data.get("stop_time", 1.0), positive=True)
+    stop_time = _number("stop_time", data.get("stop_time", DEFAULT_STOP_TIME), positive=True)
     initial = _table("[initial]", data.get("initial", {}), {"q", "u"})
     q0 = _vector3("initial.q", initial.get("q", [0.0, 0.0, 0.0]))
     u0 = _vector3("initial.u", initial.get("u", [0.0, 0.0, 0.0]))
@@ -236,51 +252,11 @@ def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
     for key, value in parts.items():
         if not isinstance(value, bool):
             raise SceneError(f"parts.{key} = {value!r} must be true or false")
-    parameters = dict(_table("[parameters]", data.get("parameters", {})))
-    known = set(model_info.parameter_names())
-    for key, value in parameters.items():
-        if key not in known:
-            raise SceneError(f"parameters: unknown parameter {key!r}")
-        if key in ("flexure.enabled", "friction.enabled"):
-            raise SceneError(f"parameters: set {key!r} with [parts]")
-        try:
-            model_info.coerce(key, value)
-        except ValueError as exc:
-            raise SceneError(f"parameters: {exc}") from None
+    parameters = _parameters(data.get("parameters", {}))
     inputs = _table("[inputs]", data.get("inputs", {}), set(_INPUTS))
     inputs = {k: _number(f"inputs.{k}", v) for k, v in inputs.items()}
-    integ = _table(
-        "[integrator]",
-        data.get("integrator", {}),
-        {"rtol", "output_interval", "moreau_h", "stick_rule", "v_eps", "g_tol"},
-    )
-    settings = IntegratorSettings(
-        rtol=_number("integrator.rtol", integ.get("rtol", 1e-6), positive=True),
-        output_interval=_number(
-            "integrator.output_interval", integ.get("output_interval", 1e-4), positive=True
-        ),
-        moreau_h=_number("integrator.moreau_h", integ.get("moreau_h", 1e-5), positive=True),
-        stick_rule=integ.get("stick_rule"),
-        v_eps=_number("integrator.v_eps", integ.get("v_eps", 0.0), nonnegative=True),
-        g_tol=_number("integrator.g_tol", integ.get("g_tol", 0.0)),
-    )
-    if not MIN_RTOL <= settings.rtol < 1:
-        raise SceneError(
-            f"integrator.rtol = {settings.rtol!r} must be in [{MIN_RTOL:g}, 1) (tighter than "
-            f"{MIN_RTOL:g} cannot be met in double precision)"
-        )
-    check_horizon(stop_time, settings.output_interval, settings.moreau_h)
-    if settings.stick_rule is not None and settings.stick_rule not in STICK_RULES:
-        raise SceneError(
-            f"integrator.stick_rule = {settings.stick_rule!r} is not one of "
-            f"{', '.join(STICK_RULES)}"
-        )
-    models = data.get("models", list(model_info.PAPER_MODELS))
-    if not isinstance(models, list) or not models:
-        raise SceneError("models must be a non-empty list")
-    for m in models:
-        if m not in model_info.MODELS:
-            raise SceneError(f"models: unknown model {m!r} (known: {', '.join(model_info.MODELS)})")
+    settings = _integrator(data.get("integrator", {}), stop_time)
+    models = _models(data.get("models", list(model_info.PAPER_MODELS)))
     description = data.get("description", "")
     if not isinstance(description, str):
         raise SceneError("description must be a string")
@@ -299,13 +275,70 @@ def _scene_from_dict(data: dict[str, Any], source: str) -> Scene:
         parameters=parameters,
         inputs=inputs,
         integrator=settings,
-        models=tuple(models),
+        models=models,
         source=source,
         cosim=cosim,
     )
     _check_initial(scene)
     _check_values(scene)
+    _check_model(scene)
     return scene
+
+
+def _parameters(table: Any) -> dict[str, Any]:
+    """[parameters]: FMU parameters by name, of the right type (not the parts' switches)."""
+    parameters = dict(_table("[parameters]", table))
+    known = set(model_info.parameter_names())
+    for key, value in parameters.items():
+        if key not in known:
+            raise SceneError(f"parameters: unknown parameter {key!r}")
+        if key in ("flexure.enabled", "friction.enabled"):
+            raise SceneError(f"parameters: set {key!r} with [parts]")
+        try:
+            model_info.coerce(key, value)
+        except ValueError as exc:
+            raise SceneError(f"parameters: {exc}") from None
+    return parameters
+
+
+def _integrator(table: Any, stop_time: float) -> IntegratorSettings:
+    """[integrator], each key defaulting to IntegratorSettings', within the limits of a run up to
+    `stop_time`."""
+    integ = _table("[integrator]", table, {f.name for f in fields(IntegratorSettings)})
+    default = IntegratorSettings()
+
+    def number(key: str, **sign: bool) -> float:
+        return _number(f"integrator.{key}", integ.get(key, getattr(default, key)), **sign)
+
+    settings = IntegratorSettings(
+        rtol=number("rtol", positive=True),
+        output_interval=number("output_interval", positive=True),
+        moreau_h=number("moreau_h", positive=True),
+        stick_rule=integ.get("stick_rule"),
+        v_eps=number("v_eps", nonnegative=True),
+        g_tol=number("g_tol"),
+    )
+    if not MIN_RTOL <= settings.rtol < 1:
+        raise SceneError(
+            f"integrator.rtol = {settings.rtol!r} must be in [{MIN_RTOL:g}, 1) (tighter than "
+            f"{MIN_RTOL:g} cannot be met in double precision)"
+        )
+    check_horizon(stop_time, settings.output_interval, settings.moreau_h)
+    if settings.stick_rule is not None and settings.stick_rule not in STICK_RULES:
+        raise SceneError(
+            f"integrator.stick_rule = {settings.stick_rule!r} is not one of "
+            f"{', '.join(STICK_RULES)}"
+        )
+    return settings
+
+
+def _models(models: Any) -> tuple[str, ...]:
+    if not isinstance(models, list) or not models:
+        raise SceneError("models must be a non-empty list")
+    for m in models:
+        if m not in model_info.MODELS:
+            raise SceneError(f"models: unknown model {m!r} (known: {', '.join(model_info.MODELS)})")
+    return tuple(models)
 
 
 def check_name(name: Any) -> str:
@@ -382,10 +415,27 @@ def _check_initial(scene: Scene) -> None:
 
 
 def _check_values(scene: Scene) -> None:
-    """Run the model's own validation (ranges, R1 < R2, v0 < v1, ...) on the scene's values."""
-    from .core import CoreModel, ParameterError
+    """Every value the scene sets, as the FMU checks it (its range, an enumeration's items), from
+    the generated interface: no binary needed."""
+    for table, values in (("parameters", scene.parameter_values()), ("inputs", scene.inputs)):
+        for name, value in values.items():
+            try:
+                model_info.check(name, value)
+            except ParameterError as exc:
+                raise SceneError(f"{table}: {exc}") from None
 
-    model = CoreModel()
+
+def _check_model(scene: Scene) -> None:
+    """The model's own checks in the C core: R1 < R2, v0 < v1, the derived quantities finite, how
+    deep the start is in the bore. Without a built core (a source checkout with no build) they
+    wait for the run, where the FMU and the core make the same checks (but for the harness's
+    limit of 1 % of contact.R1)."""
+    from .core import CoreModel
+
+    try:
+        model = CoreModel()
+    except FileNotFoundError:
+        return
     try:
         for name, value in scene.parameter_values().items():
             model.set(name, value)
@@ -412,8 +462,8 @@ def _check_values(scene: Scene) -> None:
 
 
 def load_scene(scene: str | Path) -> Scene:
-    """A built-in scene by name (``central``, ``asymmetric``, ``csfh``, ``mems``, ``combdrive``) or
-    a scene file by path. Raises :class:`SceneError` with a one-line message naming the file, the
+    """A built-in scene by name (csfh.scenes.BUILTIN_SCENES: ``central``, ``csfh``, ...) or a
+    scene file by path. Raises :class:`SceneError` with a one-line message naming the file, the
     key and the value when the scene cannot be used."""
     path = Path(scene)
     if path.suffix == ".toml" or path.exists():

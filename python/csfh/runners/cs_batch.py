@@ -230,7 +230,7 @@ class CsBatchResult:
             contact_records=cr,
         )
         tr.stats = {
-            "integrator": f"CVODE ({cs_method_name(self.scene, self.parameter_sets[i])}) inside "
+            "integrator": f"{cs_method_name(self.scene, self.parameter_sets[i])} inside "
             f"the FMU (co-simulation, batched) rtol={self.rtol:g}, communication step "
             f"{self.step:g} s",
             "steps": int(self.value(i, "diagnostics.integrator_steps")),

@@ -7,7 +7,7 @@ and the FMU's code and data no longer in the caches after the interpreter's work
 on a fine communication grid, or on a run of few steps timed against a compiled integrator, that
 is most of the time. Here Python pays one call per chunk of steps. The grid is simulate_cs's,
 computed the same way (t_next = min((k + 1) h, t_end), steps t_next - t), so the results are
-those of the Python loop, bitwise (tests/python/test_cs_steps.py)."""
+those of the Python loop, bitwise (tests/package/test_cs_steps.py)."""
 
 from __future__ import annotations
 
@@ -24,6 +24,7 @@ import numpy as np
 from fmpy.fmi1 import FMICallException
 
 from .. import paths
+from ..model._csfh_variables import BATCH_ABI_VERSION as ABI_VERSION
 
 _CALLS = ("fmi2DoStep", "fmi2GetReal", "fmi2GetInteger", "fmi2GetBoolean")
 """The calls csfh_cs_steps reports as failed (CSFH_STEPS_DO_STEP .. _GET_BOOLEAN)."""
@@ -45,10 +46,6 @@ class _Loop(Structure):
         ("n_boolean", c_size_t),
         ("boolean_vr", POINTER(c_uint)),
     ]
-
-
-ABI_VERSION = 2  # 2: csfh_cs_steps
-"""The version of the batch library's interface this package needs (csfh_cs_batch.h)."""
 
 
 @cache

@@ -1,5 +1,4 @@
-"""Running the FMU: model exchange with fmpy's CVode, co-simulation through fmi2DoStep, and a
-thin pass-through to fmpy.simulate_fmu.
+"""Running the FMU: model exchange with fmpy's CVode, and co-simulation through fmi2DoStep.
 
 The model-exchange driver is fmpy's FMU2Model with fmpy's bundled CVODE (BDF, dense direct solver,
 root finding on the event indicator), stepped one internal step at a time so that every step can be
@@ -29,6 +28,7 @@ from fmpy.model_description import ModelDescription
 
 from ..errors import SimulationError
 from ..model import model_info
+from ..model._csfh_variables import MAX_ME_STEPS
 from ..model.fmus import FmuLog
 from ..model.scene import MAX_OUTPUT_SAMPLES, Scene
 from ..paths import fmu_path
@@ -37,7 +37,7 @@ from ..trajectory import CONTACT_FIELDS, Trajectory
 from . import cs_steps
 from .direct_calls import DirectCalls
 
-STATE_NAMES = ("body1.x", "body1.y", "body1.theta", "body1.vx", "body1.vy", "body1.omega")
+STATE_NAMES = model_info.STATE_NAMES
 OUTPUT_NAMES = {  # table column -> FMU variable
     "x": "body1.x",
     "y": "body1.y",
@@ -69,6 +69,8 @@ CS_OUTPUT_NAMES = {  # co-simulation only: the peaks over each communication ste
 each row (located on CVODE's interpolant; at t = 0 the values there), the flexure stress and its
 peak (tracked inside the step only with flexure.track_stress_peak), the Hertz pressure and its
 peak, and the frame's acceleration (a_base plus the shock pulse)."""
+model_info.require(OUTPUT_NAMES.values(), "runners.fmu.OUTPUT_NAMES")
+model_info.require(CS_OUTPUT_NAMES.values(), "runners.fmu.CS_OUTPUT_NAMES")
 
 
 @cache
@@ -307,7 +309,7 @@ def simulate_me(
     parameters: dict[str, Any] | None = None,
     output_times: np.ndarray | None = None,
     progress: Progress | None = None,
-    max_steps: int = 5_000_000,
+    max_steps: int = MAX_ME_STEPS,
 ) -> Trajectory:
     """Model exchange of the FMU with contact law `law`, CVode (BDF) via fmpy, events located by
     root finding on the gap. Returns the output table (the grid k * output_interval, or the given
@@ -554,7 +556,7 @@ def cs_method_name(scene: Scene, parameters: dict[str, Any] | None = None) -> st
     """The co-simulation method a run uses (solver.method: from the overrides, the scene, or the
     FMU's start value)."""
     values = {**scene.parameter_values(), **(parameters or {})}
-    start = int(model_info.variables()["solver.method"].start)  # the XML holds a string
+    start = model_info.variables()["solver.method"].start
     value = model_info.coerce("solver.method", values.get("solver.method", start))
     names = {v: k for k, v in model_info.enumeration("SolverMethod").items()}
     return names.get(int(value), str(value))
@@ -571,7 +573,8 @@ def simulate_cs(
     progress: Progress | None = None,
     step_loop: str | None = None,
 ) -> Trajectory:
-    """Co-simulation of the FMU (CVODE inside the FMU): one output row per communication step.
+    """Co-simulation of the FMU (its own integrator, solver.method): one output row per
+    communication step.
 
     The communication loop (fmi2DoStep, then reading the outputs and the contact events) runs in
     C, a chunk of steps per call (`csfh.runners.cs_steps`, in libcsfh_batch.so), or, with
@@ -705,34 +708,3 @@ def simulate_cs(
         "do_step_time": do_step_time,
     }
     return tr
-
-
-def simulate_fmpy(
-    scene: Scene,
-    law: str,
-    *,
-    rtol: float | None = None,
-    output_interval: float | None = None,
-    **kwargs: Any,
-) -> dict[str, np.ndarray]:
-    """fmpy.simulate_fmu in model exchange with CVode, as fmpy does it (for cross-checks).
-    Mind fmpy's limit of 500 internal CVode steps per output interval."""
-    import fmpy
-
-    values: dict[str, Any] = dict(scene.parameter_values(law))
-    values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
-    values.update(scene.inputs)
-    result = fmpy.simulate_fmu(
-        str(fmu_path()),
-        fmi_type="ModelExchange",
-        stop_time=scene.stop_time,
-        relative_tolerance=scene.integrator.rtol if rtol is None else rtol,
-        output_interval=scene.integrator.output_interval
-        if output_interval is None
-        else output_interval,
-        start_values=values,
-        record_events=True,
-        output=[*OUTPUT_NAMES.values(), "contact.count"],
-        **kwargs,
-    )
-    return {name: np.asarray(result[name]) for name in result.dtype.names}

@@ -15,7 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from ..model.core import library
+from ..model._csfh_variables import MOREAU_V_STICK
+from ..model.core import N_STATES, library
 from ..model.instance import core_model
 from ..model.scene import MAX_MOREAU_STEPS, MAX_OUTPUT_SAMPLES, Scene, load_scene
 from ..trajectory import Trajectory
@@ -123,7 +124,7 @@ def moreau(
     assert ncols == len(_RECORD) and icols == len(_IMPACT), "core library and harness disagree"
     records = np.zeros((max_records, ncols))
     impacts = np.zeros((max_impacts, icols))
-    x_end = np.zeros(6)
+    x_end = np.zeros(N_STATES)
     stats = (ctypes.c_longlong * len(_STATS))()
     model = core_model(scene, parameters)
     x0 = np.array(scene.x0, dtype=float)
@@ -134,7 +135,7 @@ def moreau(
         h,
         STICK_RULES[rule],
         scene.integrator.v_eps if v_eps is None else v_eps,
-        1e-9,
+        MOREAU_V_STICK,
         scene.integrator.g_tol if g_tol is None else g_tol,
         0.0,
         x0.ctypes.data_as(dp),

@@ -18,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from ..model.core import CoreModel, library
+from ..model._csfh_variables import MOREAU_V_STICK
+from ..model.core import N_STATES, CoreModel, library
 from ..model.instance import core_model
 from ..model.scene import Scene
 from ..trajectory import Trajectory
@@ -64,7 +65,7 @@ class BatchResult:
     stick_rule: str
     records: np.ndarray  # (n, max_records, 16)
     impacts: np.ndarray  # (n, max_impacts, 10)
-    x_end: np.ndarray  # (n, 6)
+    x_end: np.ndarray  # (n, N_STATES)
     stats: np.ndarray  # (n, 9)
     status: np.ndarray  # (n,)
     wall_time: float
@@ -131,7 +132,7 @@ def moreau_batch(
     x0 = np.ascontiguousarray(np.tile(np.array(scene.x0, dtype=float), (n, 1)))
     records = np.zeros((n, max_records, len(_RECORD)))
     impacts = np.zeros((n, max_impacts, len(_IMPACT)))
-    x_end = np.zeros((n, 6))
+    x_end = np.zeros((n, N_STATES))
     stats = np.zeros((n, len(_STATS)), dtype=np.int64)
     status = np.zeros(n, dtype=np.int32)
     wall = time.perf_counter()
@@ -141,7 +142,7 @@ def moreau_batch(
         h,
         STICK_RULES[rule],
         scene.integrator.v_eps if v_eps is None else v_eps,
-        1e-9,
+        MOREAU_V_STICK,
         scene.integrator.g_tol if g_tol is None else g_tol,
         0.0,
         x0.ctypes.data_as(_dp),

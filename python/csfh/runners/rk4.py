@@ -12,7 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from ..model.core import library
+from ..model._csfh_variables import RK4_H0, RK4_TOL
+from ..model.core import N_STATES, library
 from ..model.instance import core_model
 from ..model.scene import Scene
 from ..trajectory import CONTACT_FIELDS, Trajectory
@@ -39,8 +40,8 @@ def rk4_event(
     scene: Scene,
     law: str,
     *,
-    h0: float = 2e-4,
-    tol: float = 1e-4,
+    h0: float = RK4_H0,
+    tol: float = RK4_TOL,
     h_min: float | None = None,
     output_interval: float | None = None,
     stop_time: float | None = None,
@@ -61,7 +62,7 @@ def rk4_event(
     records = np.zeros((max_records, len(_RECORD)))
     contacts = np.zeros((max_contacts, len(CONTACT_FIELDS)))
     x0 = np.array(scene.x0, dtype=float)
-    x_end = np.zeros(6)
+    x_end = np.zeros(N_STATES)
     stats = (ctypes.c_longlong * len(_STATS))()
     dp = ctypes.POINTER(ctypes.c_double)
     wall = time.perf_counter()

@@ -30,13 +30,14 @@ def simulate(
     `model` is one of the FMU's contact laws (``LN_spheres``, ``LN_cylinders``, ``LN_ESDU``,
     ``HuntCrossley``, ``Flores``) or ``Moreau``. Event-driven laws run through the FMU, by model
     exchange with fmpy's CVode (``interface="me"``, default: every internal step is recorded,
-    events are located by root finding on the gap) or by co-simulation with CVODE inside the
-    FMU (``"cs"``); ``Moreau`` runs the time stepper of the C core (see :func:`moreau`).
+    events are located by root finding on the gap) or by co-simulation with the FMU's own
+    integrator (``"cs"``; ``solver.method``, default ``auto``: RK45, BDF where the motion is
+    stiff); ``Moreau`` runs the time stepper of the C core (see :func:`moreau`).
     ``quiet=False`` shows a progress bar.
 
     Options (each defaults to the scene's value):
 
-    * ``stop_time``: s; ``rtol``: CVODE's relative tolerance (FMU models);
+    * ``stop_time``: s; ``rtol``: the relative tolerance of the integrator (FMU models);
     * ``output_interval`` (model exchange) or ``communication_step`` (co-simulation): s;
     * ``parameters``: a dict of FMU parameters applied on top of the scene's;
     * model exchange only: ``output_times`` (an increasing array instead of the grid),

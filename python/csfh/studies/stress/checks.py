@@ -13,7 +13,7 @@ from ...trajectory import Trajectory
 from .oracles import (
     DELTA,
     M1,
-    MOREAU_H,
+    MOREAU_STEP,
     G,
     effective_restitution,
     hertz_contact_time,
@@ -132,8 +132,8 @@ def grazing_check(tr: Trajectory, model: str, integ: str) -> tuple[bool, str, di
 def resting_check(tr: Trajectory, model: str, integ: str) -> tuple[bool, str, dict[str, Any]]:
     vy_end = float(abs(tr.table["vy"][-1]))
     if model == "Moreau":
-        lam = float(tr.table["Lambda_N"][-1]) / max(1, round(1e-3 / MOREAU_H))
-        expected = M1 * G * MOREAU_H
+        lam = float(tr.table["Lambda_N"][-1]) / max(1, round(1e-3 / MOREAU_STEP))
+        expected = M1 * G * MOREAU_STEP
         ok = abs(lam / expected - 1) < 1e-6 and vy_end < 1e-6
         return (
             ok,

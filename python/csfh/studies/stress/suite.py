@@ -34,7 +34,7 @@ from ...runners.moreau import moreau
 from ...runners.rk4 import rk4_event
 from ...trajectory import Trajectory
 from .cases import Case
-from .oracles import M1, MOREAU_H, RK4_H0, RK4_TOL, RTOL
+from .oracles import M1, MOREAU_STEP, RK4_H0, RK4_TOL, RTOL
 
 ENERGY_RTOL = 1e4 * RTOL  # allowed numerical energy gain of ME/CS, relative to the energy scale
 CS_METHODS: dict[str, str | None] = {"CS": None, "CS-RK45": "RK45"}
@@ -56,7 +56,7 @@ def _run_one(case: Case, model: str, integ: str) -> tuple[Trajectory | None, str
     t0 = time.perf_counter()
     try:
         if model == "Moreau":
-            tr = moreau(case.scene, h=MOREAU_H)
+            tr = moreau(case.scene, h=MOREAU_STEP)
         elif integ == "ME":
             tr = simulate_me(case.scene, model, rtol=RTOL)
         elif integ in CS_METHODS:
