@@ -144,15 +144,7 @@ int csfh_api_moreau_run(csfh_fmu_t *model, double h, int stick_rule, double v_ep
     csfh_moreau_stats_t s;
     const int status = csfh_moreau_run(&model->m, &o, t0, x0, n_steps, record_every, records, max_records,
                                        impacts, max_impacts, x_end, &s);
-    stats[0] = s.steps;
-    stats[1] = s.active_steps;
-    stats[2] = s.stick_steps;
-    stats[3] = s.slip_steps;
-    stats[4] = s.fallback_steps;
-    stats[5] = s.onsets;
-    stats[6] = (long long)s.records;
-    stats[7] = (long long)s.impacts;
-    stats[8] = s.impacts_dropped;
+    csfh_moreau_stats_array(&s, stats);
     return status;
 }
 

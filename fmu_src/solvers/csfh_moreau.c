@@ -233,6 +233,19 @@ static void accumulate(double acc[5], const csfh_moreau_step_t *info, double h)
     acc[3] += info->Lambda_T;
 }
 
+void csfh_moreau_stats_array(const csfh_moreau_stats_t *s, long long out[CSFH_MOREAU_NSTATS])
+{
+    out[0] = s->steps;
+    out[1] = s->active_steps;
+    out[2] = s->stick_steps;
+    out[3] = s->slip_steps;
+    out[4] = s->fallback_steps;
+    out[5] = s->onsets;
+    out[6] = (long long)s->records;
+    out[7] = (long long)s->impacts;
+    out[8] = s->impacts_dropped;
+}
+
 int csfh_moreau_run(csfh_model_t *m, const csfh_moreau_options_t *o, double t0, const double x0[6],
                     long long n_steps, long long record_every, double *records, size_t max_records,
                     double *impacts, size_t max_impacts, double x_end[6],

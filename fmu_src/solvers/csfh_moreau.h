@@ -90,6 +90,12 @@ typedef struct {
     long long impacts_dropped;   /* onsets beyond the impact buffer */
 } csfh_moreau_stats_t;
 
+/* The statistics as CSFH_MOREAU_NSTATS integers, in the order of csfh_moreau_stats_t (the
+ * harness's array: steps, active, stick, slip, fallback, onsets, records, impacts,
+ * impacts_dropped). */
+#define CSFH_MOREAU_NSTATS 9
+void csfh_moreau_stats_array(const csfh_moreau_stats_t *s, long long out[CSFH_MOREAU_NSTATS]);
+
 /* Integrate n_steps steps from x0 (6 states) at t0. Every `record_every` steps (and never more
  * than max_records) a row of CSFH_MR_NCOLS doubles is written to records (the first row is the
  * initial state); every contact onset writes a row of CSFH_MI_NCOLS to impacts (up to

@@ -23,16 +23,7 @@ long long csfh_moreau_batch(csfh_model_t *const *models, size_t n, double h, int
         double *imp = impacts != NULL ? impacts + i * max_impacts * CSFH_MI_NCOLS : NULL;
         status[i] = csfh_moreau_run(models[i], &o, t0, x0 + 6 * i, n_steps, record_every, rec,
                                     max_records, imp, max_impacts, x_end + 6 * i, &s);
-        long long *st = stats + i * CSFH_MOREAU_BATCH_NSTATS;
-        st[0] = s.steps;
-        st[1] = s.active_steps;
-        st[2] = s.stick_steps;
-        st[3] = s.slip_steps;
-        st[4] = s.fallback_steps;
-        st[5] = s.onsets;
-        st[6] = (long long)s.records;
-        st[7] = (long long)s.impacts;
-        st[8] = s.impacts_dropped;
+        csfh_moreau_stats_array(&s, stats + i * CSFH_MOREAU_BATCH_NSTATS);
         failed += status[i] != CSFH_OK;
     }
     return failed;

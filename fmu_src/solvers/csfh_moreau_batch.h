@@ -13,10 +13,8 @@
 
 CSFH_INTERNAL_BEGIN
 
-/* Number of statistics per variant written by csfh_moreau_batch (the order of
- * csfh_moreau_stats_t: steps, active, stick, slip, fallback, onsets, records, impacts,
- * impacts_dropped). */
-#define CSFH_MOREAU_BATCH_NSTATS 9
+/* Number of statistics per variant written by csfh_moreau_batch (csfh_moreau_stats_array). */
+#define CSFH_MOREAU_BATCH_NSTATS CSFH_MOREAU_NSTATS
 
 /* Run n variants with the same step options, start time and number of steps.
  *   models       n model handles (parameters set and prepared; each is modified as by a run)
