@@ -17,19 +17,20 @@ PACKAGE = Path(__file__).resolve().parents[2] / "python" / "csfh"
 LAYERS: dict[str, int] = {
     "csfh._version": 0,
     "csfh.errors": 0,
-    "csfh.paths": 0,
-    "csfh.output": 0,
-    "csfh.progress": 0,
-    "csfh.scenes": 0,
-    "csfh.trajectory": 1,
-    "csfh.plotting": 1,
-    "csfh.model": 2,
-    "csfh.runners": 3,
-    "csfh.batch": 4,
-    "csfh.cosim": 4,
-    "csfh.studies": 5,
-    "csfh.cli": 6,
-    "csfh": 7,  # the package's face (__init__, __main__)
+    "csfh.paths": 1,
+    "csfh.progress": 1,
+    "csfh.scenes": 1,
+    "csfh.safepath": 1,  # the output folders' path checks, under output
+    "csfh.output": 2,
+    "csfh.trajectory": 3,
+    "csfh.plotting": 3,
+    "csfh.model": 4,
+    "csfh.runners": 5,
+    "csfh.batch": 6,
+    "csfh.cosim": 6,
+    "csfh.studies": 7,
+    "csfh.cli": 8,
+    "csfh": 9,  # the package's face (__init__, __main__)
 }
 """Rank of each part: a module may import only from parts of a lower rank, and from its own part."""
 
