@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <time.h>
 
+#include "csfh_fmu.h"
 #include "csfh_model.h"
 #include "csfh_variables.h"
 
@@ -58,7 +59,7 @@ int main(void)
     csfh_model_t models[NC];
     double xs[NC][6];
     for (int c = 0; c < NC; c++) {
-        csfh_model_set_defaults(&models[c]);
+        csfh_fmu_model_defaults(&models[c]);
         models[c].p.law = configs[c].law;
         models[c].p.flexure_enabled = configs[c].flexure;
         models[c].p.friction_enabled = configs[c].friction;

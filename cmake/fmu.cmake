@@ -65,10 +65,10 @@ function(csfh_add_fmu_binary target)
   add_library(${target} MODULE ${ARG_SOURCES})
   if(ARG_FMI_VERSION STREQUAL "3")
     set(output_dir ${CMAKE_BINARY_DIR}/binaries3/${ARG_MODEL_IDENTIFIER}/${CSFH_FMU3_PLATFORM})
-    set(exports ${PROJECT_SOURCE_DIR}/fmu_src/fmi/exports3.map)
+    set(exports ${PROJECT_SOURCE_DIR}/fmu_src/fmu/fmi3/exports.map)
   else()
     set(output_dir ${CMAKE_BINARY_DIR}/binaries/${ARG_MODEL_IDENTIFIER}/${CSFH_FMU_PLATFORM})
-    set(exports ${PROJECT_SOURCE_DIR}/fmu_src/fmi/exports.map)
+    set(exports ${PROJECT_SOURCE_DIR}/fmu_src/fmu/fmi2/exports.map)
   endif()
   set_target_properties(${target} PROPERTIES
     OUTPUT_NAME ${ARG_MODEL_IDENTIFIER} PREFIX ""
@@ -213,8 +213,8 @@ function(csfh_add_fmu_package name)
   add_custom_target(${name}_fmu_package ALL DEPENDS ${fmu})
 endfunction()
 
-# build/fmi3/<name>.fmu: the FMI 3.0 build of the same model (fmu_src/fmi/fmi3_glue.c over the same
-# instance, stepper and model), modelDescription.xml from the same variables file
+# build/fmi3/<name>.fmu: the FMI 3.0 build of the same model (the front-end fmu_src/fmu/fmi3/ over
+# the same instance, stepper and model), modelDescription.xml from the same variables file
 # (generate.py --fmi-version 3), the binaries of every platform built under
 # binaries/<platform tuple>/ (FMI 3.0's names; darwin: one directory per architecture) and the
 # documentation. A binary FMU: the sources are in the FMI 2.0 FMU.

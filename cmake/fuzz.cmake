@@ -22,24 +22,19 @@ set(CSFH_FUZZ_FLAGS -fsanitize=address,undefined -fno-sanitize-recover=all
 
 enable_testing()
 
-# csfh: the FMI glue, the csfh model adapter and the physics core; the comb-drive actuator: the
-# same glue with its own model and table
-set(_fuzz_sources_csfh ${CSFH_FMI_SOURCES} ${CSFH_CORE_SOURCES})
-set(_fuzz_sources_combdrive
-  fmu_src/fmi/fmi2_glue.c fmu_src/fmi/fmu_instance.c fmu_src/fmi/cosimulation.c
-  fmu_src/fmi/rk45.c
-  fmu_src/combdrive/combdrive_model.c fmu_src/combdrive/combdrive_fmu_model.c
-  fmu_src/core/csfh_vartable.c ${COMBDRIVE_GEN_DIR}/combdrive_variables.c)
-set(_fuzz_gen_csfh ${CSFH_GEN_DIR})
-set(_fuzz_gen_combdrive ${COMBDRIVE_GEN_DIR})
+# csfh: the FMU's own sources (the FMU layer, the csfh model adapter and the physics); the
+# comb-drive actuator: the same FMU layer with its own model and table
+set(_fuzz_sources_csfh ${CSFH_FMU_SOURCES})
+set(_fuzz_sources_combdrive ${COMBDRIVE_FMU_SOURCES})
+set(_fuzz_include_csfh ${CSFH_FMU_INCLUDE_DIRS})
+set(_fuzz_include_combdrive ${COMBDRIVE_FMU_INCLUDE_DIRS})
 
 foreach(_fmu csfh combdrive)
   foreach(_program fuzz_fmi fmu_states)
     set(_target ${_program}_${_fmu})
     add_executable(${_target} tests/fuzz/${_program}.c ${_fuzz_sources_${_fmu}})
     add_dependencies(${_target} csfh_generate)
-    target_include_directories(${_target} PRIVATE ${FMI_HEADERS_DIR} fmu_src/fmi fmu_src/core
-                               fmu_src/combdrive ${_fuzz_gen_${_fmu}})
+    target_include_directories(${_target} PRIVATE ${FMI_HEADERS_DIR} ${_fuzz_include_${_fmu}})
     target_compile_options(${_target} PRIVATE ${CSFH_WARNINGS} ${CSFH_FUZZ_FLAGS})
     # a hopeless step (fuzzed g = 1e20, tolerance 1e-300, a step of 1e300 s) fails at the same
     # guard as in the FMU, after 20000 integrator steps instead of 500000: seconds -> 0.1 s
@@ -49,14 +44,15 @@ foreach(_fmu csfh combdrive)
   endforeach()
 endforeach()
 
-# the FMI 3.0 front-end (tests/fuzz/fuzz_fmi3.c): the same sources with fmi3_glue.c
+# the FMI 3.0 front-end (tests/fuzz/fuzz_fmi3.c): the same sources with fmu_src/fmu/fmi3/
 foreach(_fmu csfh combdrive)
   set(_target fuzz_fmi3_${_fmu})
-  list(TRANSFORM _fuzz_sources_${_fmu} REPLACE "fmi2_glue\\.c$" "fmi3_glue.c" OUTPUT_VARIABLE _sources3)
+  set(_sources3 ${_fuzz_sources_${_fmu}})
+  list(REMOVE_ITEM _sources3 ${CSFH_FMI2_FRONT_END})
+  list(APPEND _sources3 ${CSFH_FMI3_FRONT_END})
   add_executable(${_target} tests/fuzz/fuzz_fmi3.c ${_sources3})
   add_dependencies(${_target} csfh_generate)
-  target_include_directories(${_target} PRIVATE ${FMI_HEADERS_DIR} fmu_src/fmi fmu_src/core
-                             fmu_src/combdrive ${_fuzz_gen_${_fmu}})
+  target_include_directories(${_target} PRIVATE ${FMI_HEADERS_DIR} ${_fuzz_include_${_fmu}})
   target_compile_options(${_target} PRIVATE ${CSFH_WARNINGS} ${CSFH_FUZZ_FLAGS})
   target_compile_definitions(${_target} PRIVATE MAX_STEPS_PER_CALL=20000L)
   target_link_options(${_target} PRIVATE ${CSFH_FUZZ_FLAGS})

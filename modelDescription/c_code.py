@@ -96,7 +96,7 @@ def _checked_range(v: dict, enums: dict) -> tuple[float, float, bool, bool, int]
 
 
 def c_entry(v: dict, struct: str, enums: dict) -> str:
-    """One entry of the table (csfh_variable_t, fmu_src/core/csfh_vartable.h)."""
+    """One entry of the table (csfh_variable_t, fmu_src/fmu/csfh_vartable.h)."""
     field = v["field"]
     lo, hi, lo_open, hi_open, has_range = _checked_range(v, enums)
     start = v.get("start", 0)

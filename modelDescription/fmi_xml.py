@@ -267,7 +267,7 @@ FMI3_CS_ATTRIBUTES = {
     "canSerializeFMUstate": "canSerializeFMUState",
     "providesDirectionalDerivative": "providesDirectionalDerivatives",
 }
-# what the FMI 3.0 front-end adds to co-simulation (fmu_src/fmi/fmi3_glue.c): Event Mode, and
+# what the FMI 3.0 front-end adds to co-simulation (fmu_src/fmu/fmi3/fmi3_glue.c): Event Mode, and
 # fmi3DoStep returning early at an event when the importer allows it
 FMI3_CS_DEFAULT = {
     "hasEventMode": True,

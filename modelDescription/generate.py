@@ -15,7 +15,7 @@ and, with --python-dir, the Python module of the same interface and constants
 
 With --fmi-version 3 the model description is FMI 3.0's (the same variables, value references,
 start values, ranges and instantiation token; the C files are the same): the FMI 3.0 build of
-the FMU (fmu_src/fmi/fmi3_glue.c) packages it. The FMI 3.0 co-simulation capabilities are the
+the FMU (fmu_src/fmu/fmi3/fmi3_glue.c) packages it. The FMI 3.0 co-simulation capabilities are the
 [cosimulation] table's (translated) plus [fmi3_cosimulation]; the model-exchange event
 indicators are the variables named by [model] event_indicator_variables (FMI 3.0 declares each
 event indicator as a variable).

@@ -34,7 +34,7 @@ The list (TOML):
 
     [[mutant]]
     name = "moreau-m-for-I"
-    file = "fmu_src/core/csfh_moreau.c"
+    file = "fmu_src/solvers/csfh_moreau.c"
     search = "1.0 / m->p.I1}"
     replace = "1.0 / m->p.m1}"
     why = "the rotation must use the inertia"

@@ -11,9 +11,9 @@
 #      it inside csfh/); skipped when nothing it is built from has changed since the last install.
 #
 # Usage: tools/setup.sh [--extras LIST] [--venv DIR]
-#   --extras LIST  optional parts, comma-separated: test (pytest, ruff, mypy, lizard), dask (sweeps
-#                  on a Dask cluster), cosim (the libcosimpy engine), docs (Sphinx), or all
-#                  (default: none)
+#   --extras LIST  optional parts, comma-separated: test (pytest, ruff, mypy, lizard), dask
+#                  (sweeps on a Dask cluster), cosim (the libcosimpy engine), docs (Sphinx), or
+#                  all (default: none)
 #   --venv DIR     the virtual environment (default: $CSFH_VENV, else .venv); an existing one is
 #                  used as it is
 # Environment: CSFH_PYTHON, the interpreter that creates the environment (default: the first of

@@ -44,6 +44,7 @@ python3 tools/model_citations.py check
 stage "lint"
 python3 -m ruff check python tests modelDescription benchmarks examples tools docs/conf.py
 python3 -m mypy
-# the size of the package's functions: <= 80 lines, cyclomatic complexity <= 15
-python3 -m lizard -L 80 -C 15 -w python/csfh
+# the size of the functions (C, the generator's, the package's): <= 80 lines, cyclomatic
+# complexity <= 15
+python3 -m lizard -L 80 -C 15 -w fmu_src modelDescription python/csfh
 printf '\n== all passed in %dm%02ds\n' $((SECONDS / 60)) $((SECONDS % 60))

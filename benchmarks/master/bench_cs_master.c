@@ -14,15 +14,14 @@
  *   READ     comma-separated value references of Reals read at every communication point
  *   COUNT    comma-separated value references of Integers read at the end
  *   TYPE     r (Real), i (Integer) or b (Boolean)
- * The headers are fmpy's FMI 2.0 headers, as for the FMU itself. Portable C11: POSIX (dlopen,
- * clock_gettime) or Windows (LoadLibrary, QueryPerformanceCounter), so the same master runs the
- * win64 binary (cross-built by cmake/platforms.cmake, run under wine in
- * tests/fmu/test_platforms.py). */
+ * The headers are fmpy's FMI 2.0 headers, as for the FMU itself; the binary is loaded with the
+ * masters' shared loader (fmu_src/masters/fmi2_api.h). Portable C11: POSIX (clock_gettime) or
+ * Windows (QueryPerformanceCounter), so the same master runs the win64 binary (cross-built by
+ * cmake/platforms.cmake, run under wine in tests/fmu/test_platforms.py). */
 #if defined(_WIN32)
 #include <windows.h>
 #else
 #define _POSIX_C_SOURCE 200809L
-#include <dlfcn.h>
 #include <time.h>
 #endif
 #include <math.h>
@@ -32,24 +31,11 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
+#include "fmi2_api.h"
+#include "fmu_library.h"
 
 #define MAX_REFS 64
 #define MAX_REPEATS 101
-
-typedef struct {
-    fmi2InstantiateTYPE *instantiate;
-    fmi2FreeInstanceTYPE *free_instance;
-    fmi2SetupExperimentTYPE *setup_experiment;
-    fmi2EnterInitializationModeTYPE *enter_init;
-    fmi2ExitInitializationModeTYPE *exit_init;
-    fmi2ResetTYPE *reset;
-    fmi2SetRealTYPE *set_real;
-    fmi2SetIntegerTYPE *set_integer;
-    fmi2SetBooleanTYPE *set_boolean;
-    fmi2GetRealTYPE *get_real;
-    fmi2GetIntegerTYPE *get_integer;
-    fmi2DoStepTYPE *do_step;
-} fmi_api_t;
 
 static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
                    fmi2String category, fmi2String message, ...)
@@ -65,28 +51,8 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status
     }
 }
 
-/* the shared library: the one platform-specific part besides the clock */
-typedef void (*function_t)(void);
-
+/* the clock: the platform-specific part besides loading the binary */
 #if defined(_WIN32)
-static void *library_open(const char *path)
-{
-    return (void *)LoadLibraryA(path);
-}
-static function_t library_symbol(void *library, const char *name)
-{
-    return (function_t)(void (*)(void))GetProcAddress((HMODULE)library, name);
-}
-static const char *library_error(void)
-{
-    static char message[64];
-    snprintf(message, sizeof message, "LoadLibrary failed, error %lu", (unsigned long)GetLastError());
-    return message;
-}
-static void library_close(void *library)
-{
-    FreeLibrary((HMODULE)library);
-}
 static double now(void)
 {
     LARGE_INTEGER count, frequency;
@@ -95,25 +61,6 @@ static double now(void)
     return (double)count.QuadPart / (double)frequency.QuadPart;
 }
 #else
-static void *library_open(const char *path)
-{
-    return dlopen(path, RTLD_NOW | RTLD_LOCAL);
-}
-static function_t library_symbol(void *library, const char *name)
-{
-    void *p = dlsym(library, name);
-    function_t f;
-    memcpy(&f, &p, sizeof f); /* POSIX: object and function pointers have the same form */
-    return f;
-}
-static const char *library_error(void)
-{
-    return dlerror();
-}
-static void library_close(void *library)
-{
-    dlclose(library);
-}
 static double now(void)
 {
     struct timespec ts;
@@ -121,39 +68,6 @@ static double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 #endif
-
-static function_t symbol(void *dll, const char *name)
-{
-    function_t p = library_symbol(dll, name);
-    if (p == NULL) {
-        fprintf(stderr, "bench_cs_master: %s not found\n", name);
-        exit(2);
-    }
-    return p;
-}
-
-/* every function pointer has the same representation on the platforms the FMU is built for */
-#define LOAD(field, name)                                                                        \
-    do {                                                                                         \
-        const function_t f_ = symbol(dll, name);                                                 \
-        memcpy(&api->field, &f_, sizeof f_);                                                     \
-    } while (0)
-
-static void load(void *dll, fmi_api_t *api)
-{
-    LOAD(instantiate, "fmi2Instantiate");
-    LOAD(free_instance, "fmi2FreeInstance");
-    LOAD(setup_experiment, "fmi2SetupExperiment");
-    LOAD(enter_init, "fmi2EnterInitializationMode");
-    LOAD(exit_init, "fmi2ExitInitializationMode");
-    LOAD(reset, "fmi2Reset");
-    LOAD(set_real, "fmi2SetReal");
-    LOAD(set_integer, "fmi2SetInteger");
-    LOAD(set_boolean, "fmi2SetBoolean");
-    LOAD(get_real, "fmi2GetReal");
-    LOAD(get_integer, "fmi2GetInteger");
-    LOAD(do_step, "fmi2DoStep");
-}
 
 static size_t parse_refs(const char *text, fmi2ValueReference refs[MAX_REFS])
 {
@@ -180,7 +94,7 @@ static void check(fmi2Status s, const char *what)
 }
 
 /* Start values "VR:TYPE=VALUE", in initialization mode. */
-static void set_start(const fmi_api_t *api, fmi2Component c, int argc, char **argv)
+static void set_start(const fmi2_api_t *api, fmi2Component c, int argc, char **argv)
 {
     for (int i = 0; i < argc; i++) {
         unsigned vr = 0;
@@ -192,13 +106,13 @@ static void set_start(const fmi_api_t *api, fmi2Component c, int argc, char **ar
         }
         const fmi2ValueReference ref = vr;
         if (type == 'r') {
-            check(api->set_real(c, &ref, 1, &value), argv[i]);
+            check(api->SetReal(c, &ref, 1, &value), argv[i]);
         } else if (type == 'i') {
             const fmi2Integer v = (fmi2Integer)value;
-            check(api->set_integer(c, &ref, 1, &v), argv[i]);
+            check(api->SetInteger(c, &ref, 1, &v), argv[i]);
         } else if (type == 'b') {
             const fmi2Boolean v = value != 0.0 ? fmi2True : fmi2False;
-            check(api->set_boolean(c, &ref, 1, &v), argv[i]);
+            check(api->SetBoolean(c, &ref, 1, &v), argv[i]);
         } else {
             fprintf(stderr, "bench_cs_master: bad type in '%s'\n", argv[i]);
             exit(2);
@@ -242,16 +156,20 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    void *dll = library_open(binary);
+    void *dll = fmu_library_open(binary);
     if (dll == NULL) {
-        fprintf(stderr, "bench_cs_master: %s: %s\n", binary, library_error());
+        fprintf(stderr, "bench_cs_master: %s: %s\n", binary, fmu_library_error());
         return 2;
     }
-    fmi_api_t api_storage;
-    fmi_api_t *api = &api_storage;
-    load(dll, api);
+    fmi2_api_t api_storage;
+    fmi2_api_t *api = &api_storage;
+    const char *missing = fmi2_api_load(api, dll, FMI2_API_COMMON | FMI2_API_RESET | FMI2_API_CS);
+    if (missing != NULL) {
+        fprintf(stderr, "bench_cs_master: %s not found\n", missing);
+        exit(2);
+    }
     const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
-    fmi2Component c = api->instantiate("master", fmi2CoSimulation, guid, "", &callbacks,
+    fmi2Component c = api->Instantiate("master", fmi2CoSimulation, guid, "", &callbacks,
                                        fmi2False, fmi2False);
     if (c == NULL) {
         fprintf(stderr, "bench_cs_master: fmi2Instantiate failed\n");
@@ -262,21 +180,21 @@ int main(int argc, char **argv)
     fmi2Integer counts[MAX_REFS];
     for (int r = -1; r < repeats; r++) { /* r = -1: a warm-up run, not timed */
         if (r > -1) {
-            check(api->reset(c), "fmi2Reset");
+            check(api->Reset(c), "fmi2Reset");
         }
-        check(api->setup_experiment(c, fmi2True, rtol, 0.0, fmi2True, stop), "fmi2SetupExperiment");
-        check(api->enter_init(c), "fmi2EnterInitializationMode");
+        check(api->SetupExperiment(c, fmi2True, rtol, 0.0, fmi2True, stop), "fmi2SetupExperiment");
+        check(api->EnterInitializationMode(c), "fmi2EnterInitializationMode");
         set_start(api, c, argc - 9, argv + 9);
-        check(api->exit_init(c), "fmi2ExitInitializationMode");
+        check(api->ExitInitializationMode(c), "fmi2ExitInitializationMode");
         const double t0 = now();
         for (long k = 0; k < n_steps; k++) {
-            check(api->do_step(c, (double)k * h, h, fmi2True), "fmi2DoStep");
-            check(api->get_real(c, read, n_read, values), "fmi2GetReal");
+            check(api->DoStep(c, (double)k * h, h, fmi2True), "fmi2DoStep");
+            check(api->GetReal(c, read, n_read, values), "fmi2GetReal");
         }
         if (r > -1) {
             times[r] = now() - t0;
         }
-        check(api->get_integer(c, count, n_count, counts), "fmi2GetInteger");
+        check(api->GetInteger(c, count, n_count, counts), "fmi2GetInteger");
     }
     qsort(times, (size_t)repeats, sizeof(double), compare);
     printf("{\"loop_seconds\": %.9g, \"steps\": %ld, \"read\": [", times[repeats / 2], n_steps);
@@ -288,7 +206,7 @@ int main(int argc, char **argv)
         printf("%s%d", i ? ", " : "", (int)counts[i]);
     }
     printf("]}\n");
-    api->free_instance(c);
-    library_close(dll);
+    api->FreeInstance(c);
+    fmu_library_close(dll);
     return 0;
 }

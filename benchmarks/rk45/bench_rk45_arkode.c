@@ -1,5 +1,5 @@
 #define _POSIX_C_SOURCE 199309L
-/* Why the FMU has its own explicit Runge-Kutta 5(4) (fmu_src/fmi/rk45.c) instead of SUNDIALS
+/* Why the FMU has its own explicit Runge-Kutta 5(4) (fmu_src/solvers/rk45.c) instead of SUNDIALS
  * ARKODE's ERKStep with the same Dormand-Prince table: both integrate the central scene (body 1
  * dropped onto the bore, first three contacts, 0.42 s) in the same event loop as the FMU's
  * co-simulation (one step at a time, the state at every 10 ms communication point from the dense
@@ -23,6 +23,7 @@
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 
+#include "csfh_fmu.h"
 #include "csfh_model.h"
 #include "csfh_rk4event.h"
 #include "rk45.h"
@@ -49,7 +50,7 @@ static int cmp(const void *a, const void *b)
 static void setup(csfh_model_t *m, int law)
 {
     char msg[256];
-    csfh_model_set_defaults(m);
+    csfh_fmu_model_defaults(m);
     m->p.law = law;
     m->p.flexure_enabled = 0;
     m->p.friction_enabled = 0;
@@ -227,7 +228,6 @@ static run_t run_rk4(int law)
     run_t out = {{NAN, NAN, NAN}, 0, 0.0};
     csfh_model_t m;
     setup(&m, law);
-    m.contact_by_gap = 1;
     const csfh_rk4_options_t o = {2e-4, 1e-4, 2e-4 * pow(2.0, -40)};
     const double x0[6] = {0.0, 0.01, 0.0, 0.0, 0.0, 0.0};
     csfh_rk4_stats_t st;

@@ -29,9 +29,16 @@ class SimulationError(CsfhError, RuntimeError):
     """The integration failed; the message says where and why."""
 
 
-class ResultsError(CsfhError, OSError):
-    """An output or results folder (or a file in it) that cannot be read or written; the
-    message names the path and the reason."""
+class ResultsError(CsfhError, ValueError):
+    """An output or results folder (or a file in it) that csfh cannot use or refuses to use as
+    it is: it cannot be read or written, a state file changed by hand or by another program, a
+    path leading out of the folder, a special file where a result goes; the message names the
+    path and the reason."""
+
+
+class BatchError(CsfhError, RuntimeError):
+    """Batched runs that cannot go on (a Dask scheduler that went away or has no worker that
+    runs the tasks); the message names the executor. Finished runs are kept."""
 
 
 class InstallError(CsfhError, FileNotFoundError):

@@ -20,6 +20,13 @@ the next command that opens the set. `check_set` tells a reader (``csfh plot``) 
 it reads are still one run's. (The result store of batched runs, `csfh.batch.store`, keeps its
 own append-only index and writes its signal files with `replace_file`.)
 
+A results folder is untrusted input (`csfh.safepath`): a manifest or journal is used only if it
+is well-formed (`_check_manifest`, `_check_journal`) and every path in it names a file inside the
+folder, reached without a symbolic link; a rename replaces only a regular file (or nothing), so
+a device, a FIFO, a socket, a directory or a link where a result goes is refused, before any file
+of the set is renamed. Each refusal is a `ResultsError` naming the file. Temporary files that a
+killed process left behind are removed by the next command (`remove_stale_temporaries`).
+
 CSV tables: one header line ``name [unit],name [unit],...``, then one row per sample, numbers with
 ten significant digits (`read_table` gives the columns back to that precision)."""
 
@@ -43,6 +50,20 @@ from typing import Any
 import numpy as np
 
 from .errors import ResultsError, file_errors
+from .safepath import (
+    check_target,
+    confined,
+    is_regular,
+    is_sha256,
+    is_size,
+    open_regular,
+    own_directory,
+    read_regular,
+    relative_name,
+    remove_stale_temporaries,
+    shown,
+    temporary_name,
+)
 
 RESULTS = Path("results")
 """Where a command writes when it is given no output directory: results/<scene, ...>."""
@@ -77,16 +98,17 @@ def _fsync_directory(directory: Path) -> None:
 def replace_file(path: Path, data: bytes) -> Path:
     """Write `data` to `path` whole or not at all: into a temporary file beside it (a hidden
     name), fsync'ed, then renamed over `path`. On any error or interrupt the temporary file is
-    removed and `path` is as it was. A file system error is a ResultsError naming `path`."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
+    removed and `path` is as it was. `path` must be a regular file or not exist (anything else
+    is refused: `csfh.safepath.check_target`)."""
+    path = check_target(Path(path))
+    tmp = temporary_name(path)
     try:
-        with file_errors(path), open(tmp, "wb") as fh:
+        tmp.unlink(missing_ok=True)  # a leftover or a planted link: removed, not written through
+        with os.fdopen(open_regular(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb") as fh:
             fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
-        with file_errors(path):
-            os.replace(tmp, path)
+        os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
@@ -96,13 +118,14 @@ def replace_file(path: Path, data: bytes) -> Path:
 
 def _write_bytes(path: Path, data: bytes) -> Path:
     """The one way a file reaches the disk: staged in the open output set that holds `path`,
-    else written whole by `replace_file`."""
+    else written whole by `replace_file`. A file system error is a ResultsError naming `path`."""
     path = Path(path)
     active = _set_for(path)
-    if active is not None:
-        active.stage(path, data)
-    else:
-        replace_file(path, data)
+    with file_errors(path):
+        if active is not None:
+            active.stage(path, data)
+        else:
+            replace_file(path, data)
     return path
 
 
@@ -119,12 +142,13 @@ def _sha256(data: bytes) -> str:
 
 
 def _sha256_file(path: Path) -> str | None:
+    """The SHA-256 of a regular file; None for anything else (a link, a FIFO, ...) or none."""
     h = hashlib.sha256()
     try:
-        with open(path, "rb") as fh:
+        with os.fdopen(open_regular(path, os.O_RDONLY), "rb") as fh:
             for block in iter(lambda: fh.read(1 << 20), b""):
                 h.update(block)
-    except OSError:
+    except (OSError, ResultsError):
         return None
     return h.hexdigest()
 
@@ -142,19 +166,20 @@ def _inside(path: Path, directory: Path) -> str | None:
 
 
 @contextmanager
-def _lock(path: Path) -> Iterator[None]:
-    """An exclusive lock on `path` (POSIX; elsewhere none)."""
+def locked(path: Path) -> Iterator[None]:
+    """An exclusive lock on the file `path`, created if missing, never through a symbolic link
+    (POSIX; elsewhere none)."""
     try:
         import fcntl
     except ImportError:  # pragma: no cover - not POSIX
         yield
         return
-    with open(path, "a+b") as fh:
-        fcntl.flock(fh.fileno(), fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(fh.fileno(), fcntl.LOCK_UN)
+    fd = open_regular(path, os.O_RDWR | os.O_CREAT)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
 
 
 @contextmanager
@@ -194,14 +219,16 @@ class OutputSet:
         rel = _inside(path, self.directory)
         if rel is None:  # pragma: no cover - _set_for chose this set for the path
             raise ValueError(f"{path} is not in {self.directory}")
-        target = self.staging / rel
+        own_directory(self.staging.parent)
+        target = confined(own_directory(self.staging), rel, str(path))
         target.parent.mkdir(parents=True, exist_ok=True)
         replace_file(target, data)
         self.staged[rel] = {"sha256": _sha256(data), "bytes": len(data)}
 
     def commit(self) -> None:
         """Rename the staged files into place, remove the previous run's files that this run
-        did not write (each only if it is unchanged), and write the manifest; journalled."""
+        did not write (each only if it is unchanged), and write the manifest; journalled. Every
+        target is checked before the first rename."""
         previous = read_manifest(self.directory, self.name)
         old = previous["files"] if previous else {}
         files = {**old, **self.staged} if self.merge else dict(self.staged)
@@ -210,6 +237,10 @@ class OutputSet:
             if self.merge
             else {rel: info["sha256"] for rel, info in old.items() if rel not in self.staged}
         )
+        for rel in self.staged:  # refused before the journal: nothing of the set is renamed
+            check_target(confined(self.directory, rel, str(self.directory / rel)))
+        for rel in remove:
+            confined(self.directory, rel, str(self.manifest_path))
         journal = {
             "set": self.name,
             "stage": sorted(self.staged),
@@ -223,28 +254,80 @@ class OutputSet:
         }
         with _interrupts_held():
             replace_file(self.journal_path, (json.dumps(journal, indent=1) + "\n").encode())
-            _apply(self.directory, self.name, journal)
+            _apply(self.directory, self.name, journal, str(self.journal_path))
 
 
 _ACTIVE: contextvars.ContextVar[tuple[OutputSet, ...]] = contextvars.ContextVar(
     "csfh_output_sets", default=()
 )
 """The output sets open in this context, innermost last."""
+_REFUSED = "refused (changed by hand or by another program; remove it to start the set afresh)"
 
 
-def _apply(directory: Path, name: str, journal: dict[str, Any]) -> None:
-    """Carry out a journalled commit; idempotent (a staged file already renamed is skipped), so
-    an interrupted one is completed by running it again."""
+def _read_json(path: Path) -> Any:
+    """The JSON value of a state file (a regular file: csfh.safepath.read_regular)."""
+    data = read_regular(path)
+    try:
+        return json.loads(data.decode("utf-8"))
+    except (ValueError, RecursionError):  # UnicodeDecodeError is a ValueError
+        raise ResultsError(f"{path}: not JSON: {_REFUSED}") from None
+
+
+def _check_manifest(data: Any, name: str, where: str) -> dict[str, Any]:
+    """`data` if it is a manifest of set `name` as `OutputSet.commit` writes it; else
+    ResultsError naming `where`."""
+    if not isinstance(data, dict) or data.get("format") != 1 or data.get("set") != name:
+        raise ResultsError(f"{where}: not a manifest of output set {name!r}: {_REFUSED}")
+    files = data.get("files")
+    if not isinstance(files, dict):
+        raise ResultsError(f"{where}: files = {shown(files)} is not a table: {_REFUSED}")
+    for rel, info in files.items():
+        relative_name(rel, f"{where}: files")
+        if not (isinstance(info, dict) and is_sha256(info.get("sha256"))) or not is_size(
+            info.get("bytes")
+        ):
+            raise ResultsError(
+                f"{where}: files[{rel!r}] = {shown(info)} needs sha256 (64 hex digits) and "
+                f"bytes (an integer >= 0): {_REFUSED}"
+            )
+    return data
+
+
+def _check_journal(data: Any, name: str, where: str) -> dict[str, Any]:
+    """`data` if it is a commit journal of set `name` as `OutputSet.commit` writes it; else
+    ResultsError naming `where`."""
+    if not isinstance(data, dict) or data.get("set") != name:
+        raise ResultsError(f"{where}: not a commit journal of output set {name!r}: {_REFUSED}")
+    stage, remove = data.get("stage"), data.get("remove")
+    if not isinstance(stage, list) or not isinstance(remove, dict):
+        raise ResultsError(f"{where}: stage or remove is not a list or a table: {_REFUSED}")
+    for rel in stage:
+        relative_name(rel, f"{where}: stage")
+    for rel, digest in remove.items():
+        relative_name(rel, f"{where}: remove")
+        if not is_sha256(digest):
+            raise ResultsError(f"{where}: remove[{rel!r}] = {shown(digest)}: {_REFUSED}")
+    _check_manifest(data.get("manifest"), name, where)
+    return data
+
+
+def _apply(directory: Path, name: str, journal: dict[str, Any], where: str) -> None:
+    """Carry out a checked commit journal (read from `where`); idempotent (a staged file already
+    renamed is skipped), so an interrupted one is completed by running it again. Every path is
+    confined to `directory` and every target checked before the first rename."""
     state = directory / STATE_DIR
-    staging = state / "staging" / name
-    for rel in journal["stage"]:
-        source, target = staging / rel, directory / rel
-        if source.exists():
+    staging = own_directory(own_directory(state / "staging") / name)
+    moves = [
+        (confined(staging, rel, where), check_target(confined(directory, rel, where)))
+        for rel in journal["stage"]
+    ]
+    removals = [(confined(directory, rel, where), d) for rel, d in journal["remove"].items()]
+    for source, target in moves:
+        if is_regular(source):
             target.parent.mkdir(parents=True, exist_ok=True)
             os.replace(source, target)
-    for rel, digest in journal["remove"].items():
-        target = directory / rel
-        if target.is_file() and _sha256_file(target) == digest:
+    for target, digest in removals:
+        if is_regular(target) and _sha256_file(target) == digest:
             target.unlink()
     _fsync_directory(directory)
     manifest = json.dumps(journal["manifest"], indent=1) + "\n"
@@ -255,17 +338,15 @@ def _apply(directory: Path, name: str, journal: dict[str, Any]) -> None:
 
 def _settle(directory: Path, name: str) -> None:
     """Complete a commit of set `name` that a killed process left half done, and remove what an
-    interrupted run staged (call with the set's lock held)."""
-    state = directory / STATE_DIR
+    interrupted run staged and the temporary files of killed processes (call with the set's
+    lock held). A journal that is not one `OutputSet.commit` wrote is refused."""
+    state = own_directory(directory / STATE_DIR)
     journal_path = state / f"{name}.commit.json"
-    if journal_path.exists():
-        try:
-            journal = json.loads(journal_path.read_text(encoding="utf-8"))
-        except ValueError:  # a journal is written whole before it is used: never half
-            journal = None
-        if journal is not None:
-            _apply(directory, name, journal)
+    if os.path.lexists(journal_path):
+        where = str(journal_path)
+        _apply(directory, name, _check_journal(_read_json(journal_path), name, where), where)
     shutil.rmtree(state / "staging" / name, ignore_errors=True)
+    remove_stale_temporaries(state)
 
 
 def _set_for(path: Path) -> OutputSet | None:
@@ -286,8 +367,9 @@ def output_set(directory: Path, name: str, *, merge: bool = False) -> Iterator[O
     ResultsError naming the file."""
     out = OutputSet(directory, name, merge)
     with file_errors(out.directory, "is not a usable output directory"):
-        out.state.mkdir(parents=True, exist_ok=True)
-    with file_errors(out.state / f"{name}.lock"), _lock(out.state / f"{name}.lock"):
+        out.directory.mkdir(parents=True, exist_ok=True)
+        lock = own_directory(out.state) / f"{name}.lock"
+    with file_errors(lock), locked(lock):
         _settle(out.directory, name)
         token = _ACTIVE.set((*_ACTIVE.get(), out))
         try:
@@ -296,7 +378,7 @@ def output_set(directory: Path, name: str, *, merge: bool = False) -> Iterator[O
                 out.commit()
         finally:
             _ACTIVE.reset(token)
-            if not out.journal_path.exists():  # else a commit began: the next opener ends it
+            if not os.path.lexists(out.journal_path):  # else the next opener ends the commit
                 shutil.rmtree(out.staging, ignore_errors=True)
             try:
                 out.staging.parent.rmdir()  # when no other set is staging
@@ -305,20 +387,13 @@ def output_set(directory: Path, name: str, *, merge: bool = False) -> Iterator[O
 
 
 def read_manifest(directory: Path, name: str) -> dict[str, Any] | None:
-    """The manifest of output set `name` in `directory`; None if there is none or it cannot be
-    read (the set is then treated as one written before manifests existed: nothing of it is
-    removed or checked)."""
-    path = Path(directory) / STATE_DIR / f"{name}.json"
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+    """The manifest of output set `name` in `directory`; None if there is none (the set is then
+    treated as one written before manifests existed: nothing of it is removed or checked). One
+    that is not what `OutputSet.commit` writes is refused (ResultsError naming it)."""
+    path = own_directory(Path(directory) / STATE_DIR, create=False) / f"{name}.json"
+    if not os.path.lexists(path):
         return None
-    if not isinstance(data, dict) or not isinstance(data.get("files"), dict):
-        return None
-    files = data["files"]
-    if not all(isinstance(v, dict) and isinstance(v.get("sha256"), str) for v in files.values()):
-        return None
-    return data
+    return _check_manifest(_read_json(path), name, str(path))
 
 
 def check_set(directory: Path, name: str, files: list[str], command: str) -> None:
@@ -327,10 +402,10 @@ def check_set(directory: Path, name: str, files: list[str], command: str) -> Non
     lists it). A set written before manifests existed is not checked. A commit left half done by
     a killed process is completed first (if the directory is writable)."""
     directory = Path(os.path.abspath(directory))
-    state = directory / STATE_DIR
-    if (state / f"{name}.commit.json").exists():
+    state = own_directory(directory / STATE_DIR, create=False)
+    if os.path.lexists(state / f"{name}.commit.json"):
         try:
-            with _lock(state / f"{name}.lock"):
+            with locked(state / f"{name}.lock"):
                 _settle(directory, name)
         except OSError as exc:
             reason = exc.strerror or exc

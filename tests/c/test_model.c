@@ -1,35 +1,37 @@
-/* The model layer (csfh_model.[ch]): defaults and parameter validation, the right-hand side with
- * parts switched off (evaluation counters), free fall, flexure and contact forces in the
- * derivatives, outputs, and the event indicator / event update logic of the compliant contact. */
+/* The model layer (csfh_model.[ch], with the FMU's variables of models/csfh/csfh_fmu.h):
+ * defaults and parameter validation, the right-hand side with parts switched off (evaluation
+ * counters), free fall, flexure and contact forces in the derivatives, outputs, and the event
+ * indicator / event update logic of the compliant contact. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "csfh_fmu.h"
 #include "csfh_model.h"
 #include "csfh_test.h"
 
 #define MSG_SIZE 512
 
-static int set_by_name(csfh_model_t *m, const char *name, double value)
+static int set_by_name(csfh_fmu_t *fmu, const char *name, double value)
 {
-    const csfh_variable_t *v = csfh_variable_by_name(name);
+    const csfh_variable_t *v = csfh_fmu_variable(name);
     if (!CHECK_TRUE(v != NULL, TFMT("variable %s exists", name))) {
         return -1;
     }
     if (v->type == CSFH_TYPE_REAL) {
-        *csfh_variable_real(m, v) = value;
+        *csfh_fmu_real(fmu, v) = value;
     } else {
-        *csfh_variable_int(m, v) = (int)value;
+        *csfh_fmu_int(fmu, v) = (int)value;
     }
     return 0;
 }
 
-static void setup_default(csfh_model_t *m)
+static void setup_default(csfh_fmu_t *fmu)
 {
     char msg[MSG_SIZE] = "";
-    csfh_model_set_defaults(m);
-    const int rc = csfh_model_prepare(m, msg, sizeof(msg));
+    csfh_fmu_set_defaults(fmu);
+    const int rc = csfh_fmu_prepare(fmu, msg, sizeof(msg));
     if (rc != 0) {
         printf("     prepare failed: %s\n", msg);
     }
@@ -38,69 +40,69 @@ static void setup_default(csfh_model_t *m)
 /* ---------------------------------------------------------------------------------------- */
 static void test_defaults_prepare(void)
 {
-    csfh_model_t m;
+    csfh_fmu_t fmu;
     char msg[MSG_SIZE] = "";
-    csfh_model_set_defaults(&m);
+    csfh_fmu_set_defaults(&fmu);
     /* a few start values of the `paper` preset (docs/model.md §1.1, 9) */
-    CHECK_ABS(m.p.m1, 10.0, 0.0, "default body1.m = 10");
-    CHECK_ABS(m.p.I1, 0.1617, 0.0, "default body1.I = 0.1617");
-    CHECK_ABS(m.p.g, 9.81, 0.0, "default g = 9.81");
-    CHECK_ABS(m.p.R1, 0.18, 0.0, "default R1");
-    CHECK_ABS(m.p.R2, 0.20, 0.0, "default R2");
-    CHECK_ABS(m.p.cr, 0.9, 0.0, "default c_r");
-    CHECK_ABS(m.p.E1, 210e9, 0.0, "default E1 = 210 GPa (paper preset)");
-    CHECK_ABS(m.p.beta, 5.0 * TEST_PI / 3.0, 1e-15, "default beta = 300 deg");
-    CHECK_ABS(m.x[0], 0.01, 0.0, "default q0 = [0.01, 0.01, 0]: x");
-    CHECK_ABS(m.x[1], 0.01, 0.0, "default q0: y");
-    CHECK_INT(m.p.law, CSFH_CONTACTLAW_LN_SPHERES, "default law LN_spheres");
-    CHECK_INT(m.p.esdu_reading, CSFH_ESDUREADING_I3, "default ESDU reading I3 (paper)");
-    CHECK_INT(m.p.flexure_enabled, 1, "flexure on by default");
-    CHECK_INT(m.p.friction_enabled, 1, "friction on by default");
-    CHECK_INT(m.p.conservative, 0, "co-rotated flexure by default");
+    CHECK_ABS(fmu.m.p.m1, 10.0, 0.0, "default body1.m = 10");
+    CHECK_ABS(fmu.m.p.I1, 0.1617, 0.0, "default body1.I = 0.1617");
+    CHECK_ABS(fmu.m.p.g, 9.81, 0.0, "default g = 9.81");
+    CHECK_ABS(fmu.m.p.R1, 0.18, 0.0, "default R1");
+    CHECK_ABS(fmu.m.p.R2, 0.20, 0.0, "default R2");
+    CHECK_ABS(fmu.m.p.cr, 0.9, 0.0, "default c_r");
+    CHECK_ABS(fmu.m.p.E1, 210e9, 0.0, "default E1 = 210 GPa (paper preset)");
+    CHECK_ABS(fmu.m.p.beta, 5.0 * TEST_PI / 3.0, 1e-15, "default beta = 300 deg");
+    CHECK_ABS(fmu.m.x[0], 0.01, 0.0, "default q0 = [0.01, 0.01, 0]: x");
+    CHECK_ABS(fmu.m.x[1], 0.01, 0.0, "default q0: y");
+    CHECK_INT(fmu.m.p.law, CSFH_CONTACTLAW_LN_SPHERES, "default law LN_spheres");
+    CHECK_INT(fmu.m.p.esdu_reading, CSFH_ESDUREADING_I3, "default ESDU reading I3 (paper)");
+    CHECK_INT(fmu.m.p.flexure_enabled, 1, "flexure on by default");
+    CHECK_INT(fmu.m.p.friction_enabled, 1, "friction on by default");
+    CHECK_INT(fmu.m.p.conservative, 0, "co-rotated flexure by default");
 
-    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare succeeds with the start values");
+    CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), 0, "prepare succeeds with the start values");
     const double ssum = 2.0 * (1.0 - 0.09) / 210e9;
-    CHECK_CLOSE(m.d.delta, 0.02, 1e-14, "delta = R2 - R1 = 0.02");
-    CHECK_CLOSE(m.d.K_spheres, 4.0 / (3.0 * ssum) * sqrt(0.18 * 0.2 / 0.38), 1e-14,
+    CHECK_CLOSE(fmu.m.d.delta, 0.02, 1e-14, "delta = R2 - R1 = 0.02");
+    CHECK_CLOSE(fmu.m.d.K_spheres, 4.0 / (3.0 * ssum) * sqrt(0.18 * 0.2 / 0.38), 1e-14,
                 "K_spheres = Eq. 14 external with E = 210 GPa");
-    CHECK_CLOSE(m.d.K_spheres, 4.7353e10, tol_digits(4.7353e10, 5), "K_spheres = 47.353 GPa m^0.5");
-    CHECK_CLOSE(m.d.K_cylinders, 0.25 * TEST_PI / ssum * 0.025, 1e-14, "K_cylinders = (pi/4) E* b");
-    CHECK_CLOSE(m.d.xi, 0.1425, 1e-14, "xi (LN, c_r = 0.9) = 0.1425");
-    CHECK_CLOSE(m.d.esdu_F_max, 4.0 * 0.025 * 0.02 / (2.0 * 0.91 / (TEST_PI * 210e9)), 1e-13,
+    CHECK_CLOSE(fmu.m.d.K_spheres, 4.7353e10, tol_digits(4.7353e10, 5), "K_spheres = 47.353 GPa m^0.5");
+    CHECK_CLOSE(fmu.m.d.K_cylinders, 0.25 * TEST_PI / ssum * 0.025, 1e-14, "K_cylinders = (pi/4) E* b");
+    CHECK_CLOSE(fmu.m.d.xi, 0.1425, 1e-14, "xi (LN, c_r = 0.9) = 0.1425");
+    CHECK_CLOSE(fmu.m.d.esdu_F_max, 4.0 * 0.025 * 0.02 / (2.0 * 0.91 / (TEST_PI * 210e9)), 1e-13,
                 "ESDU F* = 4 L dR/(sigma1 + sigma2), sigma with pi");
-    CHECK_CLOSE(m.d.sbar[0], 0.292, 1e-14, "sbar_x = 0.292");
-    CHECK_CLOSE(m.d.sbar[1], 0.1 - 0.072 * sqrt(3.0), 1e-13, "sbar_y = -0.0247077");
-    CHECK_CLOSE(m.d.normal.K, m.d.K_spheres, 0.0, "LN_spheres uses K_spheres");
-    CHECK_CLOSE(m.d.normal.n, 1.5, 0.0, "LN_spheres exponent 1.5");
-    CHECK_CLOSE(m.d.flexure.K0[0][0], 3235.980, 1e-6, "K0[0][0] = 3235.980 (full compliance)");
-    CHECK_CLOSE(m.d.flexure.K0[2][2], 150.6236, 1e-6, "K0[2][2] = 150.6236");
+    CHECK_CLOSE(fmu.m.d.sbar[0], 0.292, 1e-14, "sbar_x = 0.292");
+    CHECK_CLOSE(fmu.m.d.sbar[1], 0.1 - 0.072 * sqrt(3.0), 1e-13, "sbar_y = -0.0247077");
+    CHECK_CLOSE(fmu.m.d.normal.K, fmu.m.d.K_spheres, 0.0, "LN_spheres uses K_spheres");
+    CHECK_CLOSE(fmu.m.d.normal.n, 1.5, 0.0, "LN_spheres exponent 1.5");
+    CHECK_CLOSE(fmu.m.d.flexure.K0[0][0], 3235.980, 1e-6, "K0[0][0] = 3235.980 (full compliance)");
+    CHECK_CLOSE(fmu.m.d.flexure.K0[2][2], 150.6236, 1e-6, "K0[2][2] = 150.6236");
 
     /* K given instead of from materials (Table 2 values), and the cylinder law's exponent */
-    set_by_name(&m, "contact.K_from_materials", 0);
-    set_by_name(&m, "contact.law", CSFH_CONTACTLAW_LN_CYLINDERS);
-    set_by_name(&m, "contact.n_cylinders", 1.0);
-    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare with given K");
-    CHECK_ABS(m.d.K_spheres, 47.35e9, 0.0, "K_spheres_given used");
-    CHECK_ABS(m.d.K_cylinders, 2.27e9, 0.0, "K_cylinders_given used");
-    CHECK_ABS(m.d.normal.K, 2.27e9, 0.0, "LN_cylinders uses K_cylinders");
-    CHECK_ABS(m.d.normal.n, 1.0, 0.0, "LN_cylinders uses n_cylinders");
+    set_by_name(&fmu, "contact.K_from_materials", 0);
+    set_by_name(&fmu, "contact.law", CSFH_CONTACTLAW_LN_CYLINDERS);
+    set_by_name(&fmu, "contact.n_cylinders", 1.0);
+    CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), 0, "prepare with given K");
+    CHECK_ABS(fmu.m.d.K_spheres, 47.35e9, 0.0, "K_spheres_given used");
+    CHECK_ABS(fmu.m.d.K_cylinders, 2.27e9, 0.0, "K_cylinders_given used");
+    CHECK_ABS(fmu.m.d.normal.K, 2.27e9, 0.0, "LN_cylinders uses K_cylinders");
+    CHECK_ABS(fmu.m.d.normal.n, 1.0, 0.0, "LN_cylinders uses n_cylinders");
     /* consistent preset: internal R_eff with E = 100 GPa -> 9.8289e10 */
-    csfh_model_set_defaults(&m);
-    set_by_name(&m, "contact.E1", 100e9);
-    set_by_name(&m, "contact.E2", 100e9);
-    set_by_name(&m, "contact.Reff_internal", 1);
-    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare, consistent preset");
-    CHECK_CLOSE(m.d.K_spheres, 9.8289e10, tol_digits(9.8289e10, 5), "consistent: K_spheres internal = 9.8289e10");
+    csfh_fmu_set_defaults(&fmu);
+    set_by_name(&fmu, "contact.E1", 100e9);
+    set_by_name(&fmu, "contact.E2", 100e9);
+    set_by_name(&fmu, "contact.Reff_internal", 1);
+    CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), 0, "prepare, consistent preset");
+    CHECK_CLOSE(fmu.m.d.K_spheres, 9.8289e10, tol_digits(9.8289e10, 5), "consistent: K_spheres internal = 9.8289e10");
     /* other laws select their damping factor */
-    set_by_name(&m, "contact.law", CSFH_CONTACTLAW_FLORES);
-    csfh_model_prepare(&m, msg, sizeof(msg));
-    CHECK_CLOSE(m.d.xi, 0.8 / 4.5, 1e-14, "Flores xi in the model");
-    set_by_name(&m, "contact.law", CSFH_CONTACTLAW_HUNTCROSSLEY);
-    csfh_model_prepare(&m, msg, sizeof(msg));
-    CHECK_CLOSE(m.d.xi, 0.15, 1e-14, "Hunt-Crossley xi in the model");
-    set_by_name(&m, "contact.law", CSFH_CONTACTLAW_NONE);
-    csfh_model_prepare(&m, msg, sizeof(msg));
-    CHECK_ABS(m.d.xi, 0.0, 0.0, "law none: xi = 0");
+    set_by_name(&fmu, "contact.law", CSFH_CONTACTLAW_FLORES);
+    csfh_fmu_prepare(&fmu, msg, sizeof(msg));
+    CHECK_CLOSE(fmu.m.d.xi, 0.8 / 4.5, 1e-14, "Flores xi in the model");
+    set_by_name(&fmu, "contact.law", CSFH_CONTACTLAW_HUNTCROSSLEY);
+    csfh_fmu_prepare(&fmu, msg, sizeof(msg));
+    CHECK_CLOSE(fmu.m.d.xi, 0.15, 1e-14, "Hunt-Crossley xi in the model");
+    set_by_name(&fmu, "contact.law", CSFH_CONTACTLAW_NONE);
+    csfh_fmu_prepare(&fmu, msg, sizeof(msg));
+    CHECK_ABS(fmu.m.d.xi, 0.0, 0.0, "law none: xi = 0");
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -192,21 +194,21 @@ static void test_prepare_rejects(void)
         {"M_ext", -inf, "M_ext"},
     };
     for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
-        csfh_model_t m;
+        csfh_fmu_t fmu;
         char msg[MSG_SIZE] = "";
-        setup_default(&m);
-        const csfh_derived_t before = m.d;
-        if (set_by_name(&m, cases[i].name, cases[i].value) != 0) {
+        setup_default(&fmu);
+        const csfh_derived_t before = fmu.m.d;
+        if (set_by_name(&fmu, cases[i].name, cases[i].value) != 0) {
             continue;
         }
-        const int rc = csfh_model_prepare(&m, msg, sizeof(msg));
+        const int rc = csfh_fmu_prepare(&fmu, msg, sizeof(msg));
         CHECK_INT(rc, -1, TFMT("prepare rejects %s = %g", cases[i].name, cases[i].value));
         CHECK_STR_CONTAINS(msg, cases[i].named, TFMT("message names %s", cases[i].named));
         if (!CHECK_TRUE(message_shows_value(msg, cases[i].name, cases[i].value),
                         TFMT("message shows %s = %.17g", cases[i].name, cases[i].value))) {
             printf("     message: %s\n", msg);
         }
-        CHECK_TRUE(memcmp(&before, &m.d, sizeof(before)) == 0,
+        CHECK_TRUE(memcmp(&before, &fmu.m.d, sizeof(before)) == 0,
                    TFMT("derived quantities unchanged after rejecting %s", cases[i].name));
         if (csfh_test_verbose()) {
             printf("     message: %s\n", msg);
@@ -214,33 +216,33 @@ static void test_prepare_rejects(void)
     }
     /* the R1 >= R2 message names both radii */
     {
-        csfh_model_t m;
+        csfh_fmu_t fmu;
         char msg[MSG_SIZE] = "";
-        setup_default(&m);
-        m.p.R1 = 0.2;
-        csfh_model_prepare(&m, msg, sizeof(msg));
+        setup_default(&fmu);
+        fmu.m.p.R1 = 0.2;
+        csfh_fmu_prepare(&fmu, msg, sizeof(msg));
         CHECK_STR_CONTAINS(msg, "contact.R2", "R1 >= R2 message names contact.R2 too");
     }
     /* a derived quantity that overflows is named, with the parameters it comes from and their
      * values: E1 = E2 = 1e308 are each in range, but the ESDU force scale 4 L dR / sum overflows
      * (sum = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 ~ 1.8e-308) */
     {
-        csfh_model_t m;
+        csfh_fmu_t fmu;
         char msg[MSG_SIZE] = "";
-        setup_default(&m);
-        const csfh_derived_t before = m.d;
-        m.p.E1 = 1e308;
-        m.p.E2 = 1e308;
-        CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), -1, "E1 = E2 = 1e308 refused");
+        setup_default(&fmu);
+        const csfh_derived_t before = fmu.m.d;
+        fmu.m.p.E1 = 1e308;
+        fmu.m.p.E2 = 1e308;
+        CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), -1, "E1 = E2 = 1e308 refused");
         CHECK_STR_CONTAINS(msg, "contact.esdu_F_max = inf is not finite", "names the quantity");
         CHECK_STR_CONTAINS(msg, "contact.E1 = 1e+308", "names E1 and its value");
         CHECK_STR_CONTAINS(msg, "contact.E2 = 1e+308", "names E2 and its value");
         CHECK_STR_CONTAINS(msg, "contact.R2 = 0.2", "names R2 and its value");
-        CHECK_TRUE(memcmp(&before, &m.d, sizeof(before)) == 0, "derived unchanged (overflow)");
+        CHECK_TRUE(memcmp(&before, &fmu.m.d, sizeof(before)) == 0, "derived unchanged (overflow)");
         /* the message is cut, never overrun, in a short buffer */
         char small[40];
         memset(small, 'x', sizeof(small));
-        csfh_model_prepare(&m, small, 24);
+        csfh_fmu_prepare(&fmu, small, 24);
         CHECK_INT((int)strlen(small), 23, "message cut at the buffer size");
         CHECK_TRUE(small[25] == 'x', "nothing written past the buffer");
     }
@@ -257,22 +259,22 @@ static void test_prepare_rejects(void)
         {"contact.esdu_reading", 2}, {"F_ext[2]", -1e6},
     };
     for (size_t i = 0; i < sizeof(good) / sizeof(good[0]); i++) {
-        csfh_model_t m;
+        csfh_fmu_t fmu;
         char msg[MSG_SIZE] = "";
-        setup_default(&m);
-        set_by_name(&m, good[i].name, good[i].value);
-        const int rc = csfh_model_prepare(&m, msg, sizeof(msg));
+        setup_default(&fmu);
+        set_by_name(&fmu, good[i].name, good[i].value);
+        const int rc = csfh_fmu_prepare(&fmu, msg, sizeof(msg));
         if (!CHECK_INT(rc, 0, TFMT("prepare accepts %s = %.17g", good[i].name, good[i].value))) {
             printf("     message: %s\n", msg);
         }
     }
     /* a small message buffer is not overrun (ASan) and stays terminated */
     {
-        csfh_model_t m;
+        csfh_fmu_t fmu;
         char small[8];
-        setup_default(&m);
-        m.p.cr = 5.0;
-        CHECK_INT(csfh_model_prepare(&m, small, sizeof(small)), -1, "rejects with a small buffer");
+        setup_default(&fmu);
+        fmu.m.p.cr = 5.0;
+        CHECK_INT(csfh_fmu_prepare(&fmu, small, sizeof(small)), -1, "rejects with a small buffer");
         CHECK_TRUE(memchr(small, '\0', sizeof(small)) != NULL, "small message buffer terminated");
     }
 }
@@ -284,153 +286,152 @@ static void test_counters(void)
     const double x[6] = {0.0, -0.0201, 0.0, 0.3, -0.5, 0.2};
     double xdot[6];
     for (int variant = 0; variant < 4; variant++) {
-        csfh_model_t m;
+        csfh_fmu_t fmu;
         char msg[MSG_SIZE] = "";
-        csfh_model_set_defaults(&m);
+        csfh_fmu_set_defaults(&fmu);
         const char *what = "all on";
         if (variant == 1) {
-            m.p.flexure_enabled = 0;
+            fmu.m.p.flexure_enabled = 0;
             what = "flexure off";
         } else if (variant == 2) {
-            m.p.friction_enabled = 0;
+            fmu.m.p.friction_enabled = 0;
             what = "friction off";
         } else if (variant == 3) {
-            m.p.law = CSFH_CONTACTLAW_NONE;
+            fmu.m.p.law = CSFH_CONTACTLAW_NONE;
             what = "law none";
         }
-        CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, TFMT("prepare (%s)", what));
-        memcpy(m.x, x, sizeof(x));
-        m.z.in_contact = 1; /* the contact mode the event update sets (the force acts in it only) */
-        m.z.onset_speed = 0.5;
+        CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), 0, TFMT("prepare (%s)", what));
+        memcpy(fmu.m.x, x, sizeof(x));
+        fmu.m.z.in_contact = 1; /* the contact mode the event update sets (the force acts in it only) */
+        fmu.m.z.onset_speed = 0.5;
         for (int k = 0; k < 5; k++) {
-            CHECK_INT(csfh_model_derivatives(&m, m.time, x, xdot), CSFH_OK, TFMT("derivatives OK (%s)", what));
+            CHECK_INT(csfh_model_derivatives(&fmu.m, fmu.m.time, x, xdot), CSFH_OK, TFMT("derivatives OK (%s)", what));
         }
-        csfh_model_outputs(&m);
-        CHECK_INT(m.counters.rhs, 5, TFMT("rhs counter = 5 (%s)", what));
-        CHECK_INT(m.counters.flexure, variant == 1 ? 0 : 6, TFMT("flexure counter (%s)", what));
-        CHECK_INT(m.counters.contact, variant == 3 ? 0 : 6, TFMT("contact counter (%s)", what));
-        CHECK_INT(m.counters.friction, (variant == 2 || variant == 3) ? 0 : 6,
+        csfh_fmu_outputs(&fmu);
+        CHECK_INT(fmu.m.counters.rhs, 5, TFMT("rhs counter = 5 (%s)", what));
+        CHECK_INT(fmu.m.counters.flexure, variant == 1 ? 0 : 6, TFMT("flexure counter (%s)", what));
+        CHECK_INT(fmu.m.counters.contact, variant == 3 ? 0 : 6, TFMT("contact counter (%s)", what));
+        CHECK_INT(fmu.m.counters.friction, (variant == 2 || variant == 3) ? 0 : 6,
                   TFMT("friction counter (%s)", what));
         if (variant == 3) {
-            CHECK_ABS(m.out.F_N, 0.0, 0.0, "law none: no normal force even inside the gap");
-            CHECK_ABS(m.out.F_T, 0.0, 0.0, "law none: no friction force");
+            CHECK_ABS(fmu.out.F_N, 0.0, 0.0, "law none: no normal force even inside the gap");
+            CHECK_ABS(fmu.out.F_T, 0.0, 0.0, "law none: no friction force");
         }
         if (variant == 2) {
-            CHECK_TRUE(m.out.F_N > 0.0, "friction off: normal force present");
-            CHECK_ABS(m.out.F_T, 0.0, 0.0, "friction off: F_T = 0");
+            CHECK_TRUE(fmu.out.F_N > 0.0, "friction off: normal force present");
+            CHECK_ABS(fmu.out.F_T, 0.0, 0.0, "friction off: F_T = 0");
         }
     }
     /* counters saturate instead of overflowing (UBSan) */
-    csfh_model_t m;
-    setup_default(&m);
-    m.counters.rhs = 2147483647;
-    csfh_model_derivatives(&m, m.time, x, xdot);
-    CHECK_INT(m.counters.rhs, 2147483647, "rhs counter saturates at INT_MAX");
+    csfh_fmu_t fmu;
+    setup_default(&fmu);
+    fmu.m.counters.rhs = 2147483647;
+    csfh_model_derivatives(&fmu.m, fmu.m.time, x, xdot);
+    CHECK_INT(fmu.m.counters.rhs, 2147483647, "rhs counter saturates at INT_MAX");
 }
 
 /* ---------------------------------------------------------------------------------------- */
 static void test_derivatives(void)
 {
     char msg[MSG_SIZE] = "";
-    csfh_model_t m;
+    csfh_fmu_t fmu;
     double xdot[6];
 
     /* first free-fall derivatives of the default start state, flexure off: [v, -g] */
-    csfh_model_set_defaults(&m);
-    m.p.flexure_enabled = 0;
-    csfh_model_prepare(&m, msg, sizeof(msg));
-    csfh_model_init_discrete(&m);
-    CHECK_INT(csfh_model_derivatives(&m, m.time, m.x, xdot), CSFH_OK, "free fall: OK");
+    csfh_fmu_set_defaults(&fmu);
+    fmu.m.p.flexure_enabled = 0;
+    csfh_fmu_prepare(&fmu, msg, sizeof(msg));
+    csfh_model_init_discrete(&fmu.m);
+    CHECK_INT(csfh_model_derivatives(&fmu.m, fmu.m.time, fmu.m.x, xdot), CSFH_OK, "free fall: OK");
     const double ff[6] = {0.0, 0.0, 0.0, 0.0, -9.81, 0.0};
     for (int i = 0; i < 6; i++) {
         CHECK_ABS(xdot[i], ff[i], 0.0, TFMT("free fall from the start state: xdot[%d]", i));
     }
     /* moving, rotated, out of contact, with inputs */
     const double x1[6] = {0.005, 0.01, 0.1, 0.3, -0.2, 0.5};
-    CHECK_INT(csfh_model_derivatives(&m, m.time, x1, xdot), CSFH_OK, "free flight: OK");
+    CHECK_INT(csfh_model_derivatives(&fmu.m, fmu.m.time, x1, xdot), CSFH_OK, "free flight: OK");
     const double exp1[6] = {0.3, -0.2, 0.5, 0.0, -9.81, 0.0};
     for (int i = 0; i < 6; i++) {
         CHECK_ABS(xdot[i], exp1[i], 0.0, TFMT("free flight: xdot[%d] = [v, 0, -g, 0]", i));
     }
-    m.u_in[0] = 1.0;
-    m.u_in[1] = 2.0;
-    m.u_in[2] = 0.3;
-    csfh_model_derivatives(&m, m.time, x1, xdot);
+    fmu.m.u_in[0] = 1.0;
+    fmu.m.u_in[1] = 2.0;
+    fmu.m.u_in[2] = 0.3;
+    csfh_model_derivatives(&fmu.m, fmu.m.time, x1, xdot);
     CHECK_CLOSE(xdot[3], 0.1, 1e-15, "input F_ext[1]/m");
     CHECK_CLOSE(xdot[4], -9.81 + 0.2, 1e-15, "input (F_ext[2] - m g)/m");
     CHECK_CLOSE(xdot[5], 0.3 / 0.1617, 1e-15, "input M_ext/I");
-    m.u_in[0] = m.u_in[1] = m.u_in[2] = 0.0;
+    fmu.m.u_in[0] = fmu.m.u_in[1] = fmu.m.u_in[2] = 0.0;
     /* non-finite derivatives -> CSFH_ERR_NONFINITE (the contract is on the derivatives: a NaN
      * velocity is one; a NaN position with flexure off and no contact yields finite ones) */
     const double xbad[6] = {0.0, 0.0, 0.0, NAN, 0.0, 0.0};
-    CHECK_INT(csfh_model_derivatives(&m, m.time, xbad, xdot), CSFH_ERR_NONFINITE, "NaN velocity -> error");
+    CHECK_INT(csfh_model_derivatives(&fmu.m, fmu.m.time, xbad, xdot), CSFH_ERR_NONFINITE, "NaN velocity -> error");
     const double xinf[6] = {0.0, 0.0, 0.0, 0.0, 0.0, INFINITY};
-    CHECK_INT(csfh_model_derivatives(&m, m.time, xinf, xdot), CSFH_ERR_NONFINITE, "Inf angular velocity -> error");
-    m.p.flexure_enabled = 1;
+    CHECK_INT(csfh_model_derivatives(&fmu.m, fmu.m.time, xinf, xdot), CSFH_ERR_NONFINITE, "Inf angular velocity -> error");
+    fmu.m.p.flexure_enabled = 1;
     const double xbad2[6] = {NAN, 0.0, 0.0, 0.0, 0.0, 0.0};
-    CHECK_INT(csfh_model_derivatives(&m, m.time, xbad2, xdot), CSFH_ERR_NONFINITE, "NaN position with flexure -> error");
-    m.p.flexure_enabled = 0;
+    CHECK_INT(csfh_model_derivatives(&fmu.m, fmu.m.time, xbad2, xdot), CSFH_ERR_NONFINITE, "NaN position with flexure -> error");
+    fmu.m.p.flexure_enabled = 0;
 
     /* flexure at q0 = [0.01, 0.01, 0] (out of contact): Q_e/M with docs/model.md §2.4's numbers */
-    csfh_model_set_defaults(&m);
-    csfh_model_prepare(&m, msg, sizeof(msg));
-    csfh_model_init_discrete(&m);
-    CHECK_INT(m.z.in_contact, 0, "q0 starts out of contact");
-    csfh_model_derivatives(&m, m.time, m.x, xdot);
+    csfh_fmu_set_defaults(&fmu);
+    csfh_fmu_prepare(&fmu, msg, sizeof(msg));
+    csfh_model_init_discrete(&fmu.m);
+    CHECK_INT(fmu.m.z.in_contact, 0, "q0 starts out of contact");
+    csfh_model_derivatives(&fmu.m, fmu.m.time, fmu.m.x, xdot);
     CHECK_ABS(xdot[3] * 10.0, -38.914, 0.505e-3, "flexure: m xdot_vx = Q_e,x = -38.914");
     CHECK_ABS(xdot[4] * 10.0 + 98.1, -46.482, 0.505e-3, "flexure: m (xdot_vy + g) = Q_e,y = -46.482");
     /* moment: the reference used the rounded Table-1 sbar (see test_flexure): bound 1.5e-4 N m */
     CHECK_ABS(xdot[5] * 0.1617, -4.6926, 0.505e-4 + 1.5e-4, "flexure: I xdot_omega = Q_e,theta ~ -4.6926");
 
     /* contact, central, flexure off: F_N = K rho^1.5 (1 + xi rhodot/rhodot0) along +Y */
-    csfh_model_set_defaults(&m);
-    m.p.flexure_enabled = 0;
-    csfh_model_prepare(&m, msg, sizeof(msg));
+    csfh_fmu_set_defaults(&fmu);
+    fmu.m.p.flexure_enabled = 0;
+    csfh_fmu_prepare(&fmu, msg, sizeof(msg));
     const double ssum = 2.0 * (1.0 - 0.09) / 210e9;
     const double K = 4.0 / (3.0 * ssum) * sqrt(0.18 * 0.2 / 0.38);
     const double rho = 1e-5, v = 0.5;
-    const double delta = m.d.delta;
+    const double delta = fmu.m.d.delta;
     double x2[6] = {0.0, -(delta + rho), 0.0, 0.0, -v, 0.0};
     /* not yet in contact mode (a state the integrator probes before it located the onset): the
      * relation gap < 0 is frozen between events, so only gravity acts */
-    CHECK_INT(csfh_model_derivatives(&m, m.time, x2, xdot), CSFH_OK, "contact: OK");
+    CHECK_INT(csfh_model_derivatives(&fmu.m, fmu.m.time, x2, xdot), CSFH_OK, "contact: OK");
     CHECK_CLOSE(xdot[4], -9.81, 1e-12, "probe before the event: no contact force (frozen mode)");
-    /* contact_by_gap (the paper's fixed-step RK4): the force acts wherever the gap is negative,
-     * with the state's own rate as the onset rate */
-    m.contact_by_gap = 1;
-    CHECK_INT(csfh_model_derivatives(&m, m.time, x2, xdot), CSFH_OK, "contact by gap: OK");
-    m.contact_by_gap = 0;
+    /* the contact by the gap (the paper's fixed-step RK4): the force acts wherever the gap is
+     * negative, with the state's own rate as the onset rate */
+    CHECK_INT(csfh_model_derivatives_by_gap(&fmu.m, fmu.m.time, x2, xdot), CSFH_OK,
+              "contact by gap: OK");
     const double FN1 = K * pow(rho, 1.5) * (1.0 + 0.1425);
     CHECK_CLOSE(xdot[4], (FN1 - 98.1) / 10.0, 1e-9, "contact by gap: F_N = K rho^1.5 (1 + xi)");
     CHECK_ABS(xdot[3], 0.0, 1e-12, "central contact: no horizontal force");
     CHECK_ABS(xdot[5], 0.0, 1e-12, "central contact: no moment");
     /* in contact mode with the onset speed captured at the event */
-    m.z.in_contact = 1;
-    m.z.onset_speed = 2.0;
-    csfh_model_derivatives(&m, m.time, x2, xdot);
+    fmu.m.z.in_contact = 1;
+    fmu.m.z.onset_speed = 2.0;
+    csfh_model_derivatives(&fmu.m, fmu.m.time, x2, xdot);
     const double FN2 = K * pow(rho, 1.5) * (1.0 + 0.1425 * v / 2.0);
     CHECK_CLOSE(xdot[4], (FN2 - 98.1) / 10.0, 1e-9, "contact mode: F_N uses the stored onset speed");
     /* sliding to +X at the bottom: v_T = -0.3, friction +f_d F_N along t_c = [-1, 0];
      * moment a x F_T t_c = -R1 f_d F_N */
     x2[3] = 0.3;
-    csfh_model_derivatives(&m, m.time, x2, xdot);
+    csfh_model_derivatives(&fmu.m, fmu.m.time, x2, xdot);
     CHECK_CLOSE(xdot[3], -0.055 * FN2 / 10.0, 1e-9, "sliding: friction opposes the motion");
     CHECK_CLOSE(xdot[5], -0.18 * 0.055 * FN2 / 0.1617, 1e-9, "sliding: friction moment -R1 f_d F_N");
     CHECK_CLOSE(xdot[4], (FN2 - 98.1) / 10.0, 1e-9, "sliding: normal force unchanged");
     /* outputs at this state */
-    memcpy(m.x, x2, sizeof(x2));
-    CHECK_INT(csfh_model_outputs(&m), CSFH_OK, "outputs OK");
-    CHECK_CLOSE(m.out.F_N, FN2, 1e-12, "output F_N");
-    CHECK_CLOSE(m.out.F_T, 0.055 * FN2, 1e-12, "output F_T");
-    CHECK_CLOSE(m.out.gap, -rho, 1e-9, "output gap");
-    CHECK_CLOSE(m.out.indentation, rho, 1e-9, "output indentation");
-    CHECK_CLOSE(m.out.indentation_rate, v, 1e-14, "output indentation rate");
-    CHECK_CLOSE(m.out.v_T, -0.3, 1e-14, "output v_T");
-    CHECK_CLOSE(m.out.E_kinetic, 0.5 * 10.0 * (0.09 + 0.25), 1e-14, "output kinetic energy");
-    CHECK_CLOSE(m.out.E_gravity, 10.0 * 9.81 * x2[1], 1e-14, "output gravity energy m g y");
-    CHECK_CLOSE(m.out.E_contact, K * pow(rho, 2.5) / 2.5, 1e-9, "output contact energy K rho^2.5/2.5");
-    CHECK_ABS(m.out.E_flexure, 0.0, 0.0, "flexure off: no flexure energy");
-    CHECK_CLOSE(m.out.E_total, m.out.E_kinetic + m.out.E_gravity + m.out.E_contact, 1e-14, "total energy");
+    memcpy(fmu.m.x, x2, sizeof(x2));
+    CHECK_INT(csfh_fmu_outputs(&fmu), CSFH_OK, "outputs OK");
+    CHECK_CLOSE(fmu.out.F_N, FN2, 1e-12, "output F_N");
+    CHECK_CLOSE(fmu.out.F_T, 0.055 * FN2, 1e-12, "output F_T");
+    CHECK_CLOSE(fmu.out.gap, -rho, 1e-9, "output gap");
+    CHECK_CLOSE(fmu.out.indentation, rho, 1e-9, "output indentation");
+    CHECK_CLOSE(fmu.out.indentation_rate, v, 1e-14, "output indentation rate");
+    CHECK_CLOSE(fmu.out.v_T, -0.3, 1e-14, "output v_T");
+    CHECK_CLOSE(fmu.out.E_kinetic, 0.5 * 10.0 * (0.09 + 0.25), 1e-14, "output kinetic energy");
+    CHECK_CLOSE(fmu.out.E_gravity, 10.0 * 9.81 * x2[1], 1e-14, "output gravity energy m g y");
+    CHECK_CLOSE(fmu.out.E_contact, K * pow(rho, 2.5) / 2.5, 1e-9, "output contact energy K rho^2.5/2.5");
+    CHECK_ABS(fmu.out.E_flexure, 0.0, 0.0, "flexure off: no flexure energy");
+    CHECK_CLOSE(fmu.out.E_total, fmu.out.E_kinetic + fmu.out.E_gravity + fmu.out.E_contact, 1e-14, "total energy");
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -445,103 +446,103 @@ static double own_gap(const csfh_model_t *m, const double x[6])
 static void test_events(void)
 {
     char msg[MSG_SIZE] = "";
-    csfh_model_t m;
-    csfh_model_set_defaults(&m);
-    m.p.flexure_enabled = 0;
-    m.p.gap_hysteresis = 1e-6;
-    csfh_model_prepare(&m, msg, sizeof(msg));
-    const double eps = 1e-6, delta = m.d.delta;
+    csfh_fmu_t fmu;
+    csfh_fmu_set_defaults(&fmu);
+    fmu.m.p.flexure_enabled = 0;
+    fmu.m.p.gap_hysteresis = 1e-6;
+    csfh_fmu_prepare(&fmu, msg, sizeof(msg));
+    const double eps = 1e-6, delta = fmu.m.d.delta;
 
     /* out of contact: z = gap */
     const double xa[6] = {0.0, 0.01, 0.0, 0.1, -0.7, 0.3};
-    memcpy(m.x, xa, sizeof(xa));
-    csfh_model_init_discrete(&m);
-    CHECK_INT(m.z.in_contact, 0, "start out of contact");
-    CHECK_INT(m.z.contact_count, 0, "no contacts yet");
-    CHECK_ABS(csfh_model_event_indicator(&m, m.x), own_gap(&m, m.x), 1e-17, "out of contact: z = gap");
-    CHECK_INT(csfh_model_event_update(&m), 0, "no mode change with gap > eps");
+    memcpy(fmu.m.x, xa, sizeof(xa));
+    csfh_model_init_discrete(&fmu.m);
+    CHECK_INT(fmu.m.z.in_contact, 0, "start out of contact");
+    CHECK_INT(fmu.m.z.contact_count, 0, "no contacts yet");
+    CHECK_ABS(csfh_model_event_indicator(&fmu.m, fmu.m.x), own_gap(&fmu.m, fmu.m.x), 1e-17, "out of contact: z = gap");
+    CHECK_INT(csfh_model_event_update(&fmu.m), 0, "no mode change with gap > eps");
 
     /* onset at gap <= 0: the indentation rate is captured */
     const double xb[6] = {0.0, -(delta + 1e-9), 0.0, 0.1, -0.7, 0.3};
-    memcpy(m.x, xb, sizeof(xb));
-    CHECK_TRUE(csfh_model_event_indicator(&m, m.x) < 0.0, "indicator negative after crossing");
-    CHECK_INT(csfh_model_event_update(&m), 1, "onset at gap <= 0");
-    CHECK_INT(m.z.in_contact, 1, "in contact after the onset");
-    CHECK_INT(m.z.contact_count, 1, "contact count 1");
-    CHECK_CLOSE(m.z.onset_speed, 0.7, 1e-13, "onset speed = indentation rate -gamma_N = 0.7");
-    CHECK_ABS(csfh_model_event_indicator(&m, m.x), own_gap(&m, m.x) - 2.0 * eps, 1e-17,
+    memcpy(fmu.m.x, xb, sizeof(xb));
+    CHECK_TRUE(csfh_model_event_indicator(&fmu.m, fmu.m.x) < 0.0, "indicator negative after crossing");
+    CHECK_INT(csfh_model_event_update(&fmu.m), 1, "onset at gap <= 0");
+    CHECK_INT(fmu.m.z.in_contact, 1, "in contact after the onset");
+    CHECK_INT(fmu.m.z.contact_count, 1, "contact count 1");
+    CHECK_CLOSE(fmu.m.z.onset_speed, 0.7, 1e-13, "onset speed = indentation rate -gamma_N = 0.7");
+    CHECK_ABS(csfh_model_event_indicator(&fmu.m, fmu.m.x), own_gap(&fmu.m, fmu.m.x) - 2.0 * eps, 1e-17,
               "in contact: z = gap - 2 eps");
-    CHECK_TRUE(csfh_model_event_indicator(&m, m.x) <= -2.0 * eps, "indicator away from 0 after onset");
-    CHECK_INT(csfh_model_event_update(&m), 0, "no change at the same state");
+    CHECK_TRUE(csfh_model_event_indicator(&fmu.m, fmu.m.x) <= -2.0 * eps, "indicator away from 0 after onset");
+    CHECK_INT(csfh_model_event_update(&fmu.m), 0, "no change at the same state");
     /* still in contact for gap in (0, eps) */
     const double xc[6] = {0.0, -(delta - 0.5 * eps), 0.0, 0.0, 0.7, 0.0};
-    memcpy(m.x, xc, sizeof(xc));
-    CHECK_INT(csfh_model_event_update(&m), 0, "no release for 0 < gap < eps");
-    CHECK_INT(m.z.in_contact, 1, "still in contact");
+    memcpy(fmu.m.x, xc, sizeof(xc));
+    CHECK_INT(csfh_model_event_update(&fmu.m), 0, "no release for 0 < gap < eps");
+    CHECK_INT(fmu.m.z.in_contact, 1, "still in contact");
     /* release when gap >= eps; indicator crosses 0 at gap = 2 eps */
     const double xd[6] = {0.0, -(delta - 2.0 * eps), 0.0, 0.0, 0.7, 0.0};
-    memcpy(m.x, xd, sizeof(xd));
-    CHECK_ABS(csfh_model_event_indicator(&m, m.x), 0.0, 1e-15, "release indicator zero at gap = 2 eps");
-    CHECK_INT(csfh_model_event_update(&m), 2, "release at gap >= eps");
-    CHECK_INT(m.z.in_contact, 0, "out of contact after release");
-    CHECK_ABS(csfh_model_event_indicator(&m, m.x), own_gap(&m, m.x), 1e-17, "after release: z = gap");
-    CHECK_TRUE(csfh_model_event_indicator(&m, m.x) >= 1.9 * eps, "indicator away from 0 after release");
-    CHECK_CLOSE(m.z.onset_speed, 0.7, 1e-13, "onset speed kept after release (last contact)");
+    memcpy(fmu.m.x, xd, sizeof(xd));
+    CHECK_ABS(csfh_model_event_indicator(&fmu.m, fmu.m.x), 0.0, 1e-15, "release indicator zero at gap = 2 eps");
+    CHECK_INT(csfh_model_event_update(&fmu.m), 2, "release at gap >= eps");
+    CHECK_INT(fmu.m.z.in_contact, 0, "out of contact after release");
+    CHECK_ABS(csfh_model_event_indicator(&fmu.m, fmu.m.x), own_gap(&fmu.m, fmu.m.x), 1e-17, "after release: z = gap");
+    CHECK_TRUE(csfh_model_event_indicator(&fmu.m, fmu.m.x) >= 1.9 * eps, "indicator away from 0 after release");
+    CHECK_CLOSE(fmu.m.z.onset_speed, 0.7, 1e-13, "onset speed kept after release (last contact)");
     /* second onset counts */
-    memcpy(m.x, xb, sizeof(xb));
-    m.x[4] = -0.2;
-    CHECK_INT(csfh_model_event_update(&m), 1, "second onset");
-    CHECK_INT(m.z.contact_count, 2, "contact count 2");
-    CHECK_CLOSE(m.z.onset_speed, 0.2, 1e-13, "second onset speed 0.2");
+    memcpy(fmu.m.x, xb, sizeof(xb));
+    fmu.m.x[4] = -0.2;
+    CHECK_INT(csfh_model_event_update(&fmu.m), 1, "second onset");
+    CHECK_INT(fmu.m.z.contact_count, 2, "contact count 2");
+    CHECK_CLOSE(fmu.m.z.onset_speed, 0.2, 1e-13, "second onset speed 0.2");
 
     /* eccentric O1 (s1bar != 0), rotating: onset speed = -dg/dt along the velocity (FD) */
-    csfh_model_set_defaults(&m);
-    m.p.flexure_enabled = 0;
-    m.p.s1bar[0] = 0.01;
-    m.p.s1bar[1] = -0.004;
-    csfh_model_prepare(&m, msg, sizeof(msg));
+    csfh_fmu_set_defaults(&fmu);
+    fmu.m.p.flexure_enabled = 0;
+    fmu.m.p.s1bar[0] = 0.01;
+    fmu.m.p.s1bar[1] = -0.004;
+    csfh_fmu_prepare(&fmu, msg, sizeof(msg));
     {
         const double th = 0.4, ang = -2.0;
         const double c = cos(th), s = sin(th);
         const double s1[2] = {c * 0.01 + s * 0.004, s * 0.01 - c * 0.004};
-        const double r = m.d.delta + 1e-8;
+        const double r = fmu.m.d.delta + 1e-8;
         const double x[6] = {r * cos(ang) - s1[0], r * sin(ang) - s1[1], th, 0.2, -0.6, 1.5};
-        memcpy(m.x, x, sizeof(x));
-        CHECK_INT(csfh_model_event_update(&m), 1, "eccentric: onset");
+        memcpy(fmu.m.x, x, sizeof(x));
+        CHECK_INT(csfh_model_event_update(&fmu.m), 1, "eccentric: onset");
         const double h = 1e-7;
         double xp[6], xm[6];
         for (int i = 0; i < 3; i++) {
             xp[i] = x[i] + h * x[3 + i];
             xm[i] = x[i] - h * x[3 + i];
         }
-        const double gdot = (own_gap(&m, xp) - own_gap(&m, xm)) / (2.0 * h);
-        CHECK_ABS(m.z.onset_speed, -gdot, 1e-8, "eccentric: onset speed = -dg/dt (FD)");
+        const double gdot = (own_gap(&fmu.m, xp) - own_gap(&fmu.m, xm)) / (2.0 * h);
+        CHECK_ABS(fmu.m.z.onset_speed, -gdot, 1e-8, "eccentric: onset speed = -dg/dt (FD)");
     }
 
     /* initial state inside the contact -> contact mode from the start */
-    csfh_model_set_defaults(&m);
-    m.p.flexure_enabled = 0;
-    csfh_model_prepare(&m, msg, sizeof(msg));
-    memcpy(m.x, xb, sizeof(xb));
-    csfh_model_init_discrete(&m);
-    CHECK_INT(m.z.in_contact, 1, "init inside the gap: contact mode");
-    CHECK_INT(m.z.contact_count, 1, "init inside the gap: count 1");
+    csfh_fmu_set_defaults(&fmu);
+    fmu.m.p.flexure_enabled = 0;
+    csfh_fmu_prepare(&fmu, msg, sizeof(msg));
+    memcpy(fmu.m.x, xb, sizeof(xb));
+    csfh_model_init_discrete(&fmu.m);
+    CHECK_INT(fmu.m.z.in_contact, 1, "init inside the gap: contact mode");
+    CHECK_INT(fmu.m.z.contact_count, 1, "init inside the gap: count 1");
 
     /* law none: constant indicator, no mode changes */
-    csfh_model_set_defaults(&m);
-    m.p.law = CSFH_CONTACTLAW_NONE;
-    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare law none");
+    csfh_fmu_set_defaults(&fmu);
+    fmu.m.p.law = CSFH_CONTACTLAW_NONE;
+    CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), 0, "prepare law none");
     const double *states[3] = {xa, xb, xd};
-    double z0 = csfh_model_event_indicator(&m, xa);
+    double z0 = csfh_model_event_indicator(&fmu.m, xa);
     for (int k = 0; k < 3; k++) {
-        memcpy(m.x, states[k], 6 * sizeof(double));
+        memcpy(fmu.m.x, states[k], 6 * sizeof(double));
         if (k == 0) {
-            csfh_model_init_discrete(&m);
+            csfh_model_init_discrete(&fmu.m);
         }
-        CHECK_ABS(csfh_model_event_indicator(&m, m.x), z0, 0.0, TFMT("law none: indicator constant (%d)", k));
-        CHECK_INT(csfh_model_event_update(&m), 0, TFMT("law none: no mode change (%d)", k));
-        CHECK_INT(m.z.in_contact, 0, TFMT("law none: never in contact (%d)", k));
-        CHECK_INT(m.z.contact_count, 0, TFMT("law none: no contacts counted (%d)", k));
+        CHECK_ABS(csfh_model_event_indicator(&fmu.m, fmu.m.x), z0, 0.0, TFMT("law none: indicator constant (%d)", k));
+        CHECK_INT(csfh_model_event_update(&fmu.m), 0, TFMT("law none: no mode change (%d)", k));
+        CHECK_INT(fmu.m.z.in_contact, 0, TFMT("law none: never in contact (%d)", k));
+        CHECK_INT(fmu.m.z.contact_count, 0, TFMT("law none: no contacts counted (%d)", k));
     }
     CHECK_TRUE(z0 > 0.0, "law none: indicator positive");
 }
@@ -552,20 +553,21 @@ static void test_events(void)
  * The total energy output (kinetic + gravity + flexure + contact) must be conserved. */
 static void rk4_step(csfh_model_t *m, double *x, double h)
 {
+    /* fixed steps that do not locate the onset: the force acts by the gap (the paper's RK4) */
     double k1[6], k2[6], k3[6], k4[6], xt[6];
-    csfh_model_derivatives(m, m->time, x, k1);
+    csfh_model_derivatives_by_gap(m, m->time, x, k1);
     for (int i = 0; i < 6; i++) {
         xt[i] = x[i] + 0.5 * h * k1[i];
     }
-    csfh_model_derivatives(m, m->time, xt, k2);
+    csfh_model_derivatives_by_gap(m, m->time, xt, k2);
     for (int i = 0; i < 6; i++) {
         xt[i] = x[i] + 0.5 * h * k2[i];
     }
-    csfh_model_derivatives(m, m->time, xt, k3);
+    csfh_model_derivatives_by_gap(m, m->time, xt, k3);
     for (int i = 0; i < 6; i++) {
         xt[i] = x[i] + h * k3[i];
     }
-    csfh_model_derivatives(m, m->time, xt, k4);
+    csfh_model_derivatives_by_gap(m, m->time, xt, k4);
     for (int i = 0; i < 6; i++) {
         x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
     }
@@ -575,38 +577,36 @@ static void rk4_step(csfh_model_t *m, double *x, double h)
 static double energy_drift(int flex, double h, int *contacts, double *E0_out)
 {
     char msg[MSG_SIZE] = "";
-    csfh_model_t m;
-    csfh_model_set_defaults(&m);
-    m.p.cr = 1.0;
-    m.p.friction_enabled = 0;
-    m.p.flexure_enabled = flex;
-    m.p.conservative = 1;
-    /* fixed steps that do not locate the onset: the force acts by the gap (the paper's RK4) */
-    m.contact_by_gap = 1;
+    csfh_fmu_t fmu;
+    csfh_fmu_set_defaults(&fmu);
+    fmu.m.p.cr = 1.0;
+    fmu.m.p.friction_enabled = 0;
+    fmu.m.p.flexure_enabled = flex;
+    fmu.m.p.conservative = 1;
     if (!flex) { /* docs/model.md §7.5: q0 = [0, 0.01, 0], u0 = [0.3, 0, 0.5] */
         const double x0[6] = {0.0, 0.01, 0.0, 0.3, 0.0, 0.5};
-        memcpy(m.x, x0, sizeof(x0));
+        memcpy(fmu.m.x, x0, sizeof(x0));
     }
-    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare (energy test)");
-    csfh_model_init_discrete(&m);
-    csfh_model_outputs(&m);
-    const double E0 = m.out.E_total;
+    CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), 0, "prepare (energy test)");
+    csfh_model_init_discrete(&fmu.m);
+    csfh_model_outputs_by_gap(&fmu.m, &fmu.out);
+    const double E0 = fmu.out.E_total;
     double dEmax = 0.0;
-    double z = csfh_model_event_indicator(&m, m.x);
+    double z = csfh_model_event_indicator(&fmu.m, fmu.m.x);
     const int n = (int)(0.3 / h + 0.5);
     for (int k = 0; k < n; k++) {
-        rk4_step(&m, m.x, h);
-        const double znew = csfh_model_event_indicator(&m, m.x);
+        rk4_step(&fmu.m, fmu.m.x, h);
+        const double znew = csfh_model_event_indicator(&fmu.m, fmu.m.x);
         if ((z > 0.0) != (znew > 0.0)) {
-            csfh_model_event_update(&m); /* mode bookkeeping only: xi = 0 at c_r = 1 */
+            csfh_model_event_update(&fmu.m); /* mode bookkeeping only: xi = 0 at c_r = 1 */
         }
-        z = csfh_model_event_indicator(&m, m.x);
+        z = csfh_model_event_indicator(&fmu.m, fmu.m.x);
         if (k % 50 == 0) {
-            csfh_model_outputs(&m);
-            dEmax = fmax(dEmax, fabs(m.out.E_total - E0));
+            csfh_model_outputs_by_gap(&fmu.m, &fmu.out);
+            dEmax = fmax(dEmax, fabs(fmu.out.E_total - E0));
         }
     }
-    *contacts = m.z.contact_count;
+    *contacts = fmu.m.z.contact_count;
     *E0_out = E0;
     return dEmax;
 }
@@ -635,51 +635,51 @@ static void test_energy_conservation(void)
 /* the start-state check, the peak quantities, the Integer twins of the Enumerations */
 static void test_start_check_peaks_and_numbers(void)
 {
-    csfh_model_t m;
+    csfh_fmu_t fmu;
     char msg[MSG_SIZE] = "";
-    setup_default(&m);
-    CHECK_INT(csfh_model_check_start(&m, msg, sizeof(msg)), 0, "default start accepted");
+    setup_default(&fmu);
+    CHECK_INT(csfh_model_check_start(&fmu.m, msg, sizeof(msg)), 0, "default start accepted");
     /* q0 = [0.05, 0, 0]: |e| = 0.05, delta = 0.02: 0.03 m deep (docs/model.md §3) */
-    m.x[0] = 0.05;
-    m.x[1] = 0.0;
-    CHECK_INT(csfh_model_check_start(&m, msg, sizeof(msg)), -1, "0.03 m deep refused");
+    fmu.m.x[0] = 0.05;
+    fmu.m.x[1] = 0.0;
+    CHECK_INT(csfh_model_check_start(&fmu.m, msg, sizeof(msg)), -1, "0.03 m deep refused");
     CHECK_STR_CONTAINS(msg, "body1.x = 0.05 m, body1.y = 0 m, body1.theta = 0 rad", "names the state");
     CHECK_STR_CONTAINS(msg, "contact.indentation = 0.03 m", "names the indentation");
-    m.p.max_initial_indentation = 0.031;
-    CHECK_INT(csfh_model_check_start(&m, msg, sizeof(msg)), 0, "accepted under a larger limit");
-    m.p.law = CSFH_CONTACTLAW_NONE;
-    m.p.max_initial_indentation = 1e-3;
-    CHECK_INT(csfh_model_check_start(&m, msg, sizeof(msg)), 0, "no check without a contact law");
+    fmu.m.p.max_initial_indentation = 0.031;
+    CHECK_INT(csfh_model_check_start(&fmu.m, msg, sizeof(msg)), 0, "accepted under a larger limit");
+    fmu.m.p.law = CSFH_CONTACTLAW_NONE;
+    fmu.m.p.max_initial_indentation = 1e-3;
+    CHECK_INT(csfh_model_check_start(&fmu.m, msg, sizeof(msg)), 0, "no check without a contact law");
 
     /* peak quantities: zero and unevaluated in flight; F_N, |F_T|, rho in contact */
-    setup_default(&m);
+    setup_default(&fmu);
     double v[CSFH_N_PEAKS] = {1, 1, 1};
     const double x[6] = {0.0, -0.02 - 5e-5, 0.0, 0.3, -0.1, 0.0};
-    m.z.in_contact = 0;
-    const int contacts = m.counters.contact;
-    CHECK_INT(csfh_model_peak_values(&m, x, v), 0, "flight: nothing to track");
+    fmu.m.z.in_contact = 0;
+    const int contacts = fmu.m.counters.contact;
+    CHECK_INT(csfh_model_peak_values(&fmu.m, x, v), 0, "flight: nothing to track");
     CHECK_TRUE(v[0] == 0.0 && v[1] == 0.0 && v[2] == 0.0, "flight: zeros");
-    CHECK_INT(m.counters.contact, contacts, "flight: no contact evaluation");
-    m.z.in_contact = 1;
-    m.z.onset_speed = 0.1;
-    CHECK_INT(csfh_model_peak_values(&m, x, v), 1, "contact: tracked");
+    CHECK_INT(fmu.m.counters.contact, contacts, "flight: no contact evaluation");
+    fmu.m.z.in_contact = 1;
+    fmu.m.z.onset_speed = 0.1;
+    CHECK_INT(csfh_model_peak_values(&fmu.m, x, v), 1, "contact: tracked");
     csfh_contact_eval_t c;
-    csfh_model_contact(&m, x, x + 3, &c);
+    csfh_model_contact(&fmu.m, x, x + 3, &c);
     CHECK_ABS(v[0], c.F_N, 0.0, "peak quantity 0 is F_N");
     CHECK_ABS(v[1], fabs(c.F_T), 0.0, "peak quantity 1 is |F_T|");
     CHECK_ABS(v[2], 5e-5, 1e-15, "peak quantity 2 is the indentation");
     CHECK_TRUE(c.F_N > 0.0 && c.F_T != 0.0, "in contact and sliding");
 
     /* NAME_number, when not 0, sets the Enumeration in prepare */
-    csfh_model_set_defaults(&m);
-    set_by_name(&m, "contact.law_number", CSFH_CONTACTLAW_LN_CYLINDERS);
-    set_by_name(&m, "solver.method_number", CSFH_SOLVERMETHOD_RK45);
-    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare with the numbers");
-    CHECK_INT(m.p.law, CSFH_CONTACTLAW_LN_CYLINDERS, "contact.law set by its number");
-    CHECK_INT(m.cs_method, CSFH_SOLVERMETHOD_RK45, "solver.method set by its number");
-    CHECK_ABS(m.d.normal.K, m.d.K_cylinders, 0.0, "the cylinder stiffness is in use");
-    set_by_name(&m, "contact.law_number", 7);
-    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), -1, "law number 7 refused");
+    csfh_fmu_set_defaults(&fmu);
+    set_by_name(&fmu, "contact.law_number", CSFH_CONTACTLAW_LN_CYLINDERS);
+    set_by_name(&fmu, "solver.method_number", CSFH_SOLVERMETHOD_RK45);
+    CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), 0, "prepare with the numbers");
+    CHECK_INT(fmu.m.p.law, CSFH_CONTACTLAW_LN_CYLINDERS, "contact.law set by its number");
+    CHECK_INT(fmu.cs_method, CSFH_SOLVERMETHOD_RK45, "solver.method set by its number");
+    CHECK_ABS(fmu.m.d.normal.K, fmu.m.d.K_cylinders, 0.0, "the cylinder stiffness is in use");
+    set_by_name(&fmu, "contact.law_number", 7);
+    CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), -1, "law number 7 refused");
     CHECK_STR_CONTAINS(msg, "contact.law_number", "names the number");
 }
 
@@ -705,22 +705,22 @@ static void test_each_law_uses_its_stiffness(void)
         {CSFH_CONTACTLAW_FLORES, "Flores", K_sph, 8.0 * (1.0 - cr) / (5.0 * cr)},
     };
     for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
-        csfh_model_t m;
+        csfh_fmu_t fmu;
         char msg[MSG_SIZE] = "";
-        csfh_model_set_defaults(&m);
-        m.p.law = cases[i].law;
-        m.p.flexure_enabled = 0;
-        m.p.friction_enabled = 0;
-        CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, TFMT("%s: prepare", cases[i].name));
-        CHECK_CLOSE(m.d.normal.K, cases[i].K, 1e-13, TFMT("%s: stiffness in use", cases[i].name));
+        csfh_fmu_set_defaults(&fmu);
+        fmu.m.p.law = cases[i].law;
+        fmu.m.p.flexure_enabled = 0;
+        fmu.m.p.friction_enabled = 0;
+        CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), 0, TFMT("%s: prepare", cases[i].name));
+        CHECK_CLOSE(fmu.m.d.normal.K, cases[i].K, 1e-13, TFMT("%s: stiffness in use", cases[i].name));
         const double rho = 2e-5, v = 0.4, onset = 0.8;
-        const double delta = m.d.delta;
+        const double delta = fmu.m.d.delta;
         const double x[6] = {0.0, -(delta + rho), 0.0, 0.0, -v, 0.0};
         const double rho_seen = (delta + rho) - delta; /* the rounding of delta + rho */
-        m.z.in_contact = 1;
-        m.z.onset_speed = onset;
+        fmu.m.z.in_contact = 1;
+        fmu.m.z.onset_speed = onset;
         csfh_contact_eval_t c;
-        csfh_model_contact(&m, x, x + 3, &c);
+        csfh_model_contact(&fmu.m, x, x + 3, &c);
         CHECK_CLOSE(c.F_N, cases[i].K * pow(rho_seen, 1.5) * (1.0 + cases[i].xi * v / onset), 1e-12,
                     TFMT("%s: F_N = K rho^1.5 (1 + xi rho'/rho'-)", cases[i].name));
     }
@@ -730,95 +730,95 @@ static void test_each_law_uses_its_stiffness(void)
 /* base acceleration (docs/model.md §14.1) and the stress outputs (§14.2-14.5) */
 static void test_base_acceleration_and_stresses(void)
 {
-    csfh_model_t m, f;
-    setup_default(&m);
+    csfh_fmu_t fmu, f;
+    setup_default(&fmu);
     /* a state in contact, sliding, with the flexure loaded */
     const double x[6] = {0.5 * 0.02005, -0.8660254 * 0.02005, 0.01, 0.05, -0.02, 0.3};
-    m.z.in_contact = 1;
-    m.z.onset_speed = 0.5;
+    fmu.m.z.in_contact = 1;
+    fmu.m.z.onset_speed = 0.5;
     double ref[6], xdot[6], xf[6];
-    csfh_model_derivatives(&m, m.time, x, ref);
+    csfh_model_derivatives(&fmu.m, fmu.m.time, x, ref);
     /* a_base = 0 (the default) is bitwise the model without it: the values of a model whose
      * a_base was never touched, and x - 0 = x in every sum */
-    CHECK_TRUE(m.a_base[0] == 0.0 && m.a_base[1] == 0.0, "a_base starts at 0");
+    CHECK_TRUE(fmu.m.a_base[0] == 0.0 && fmu.m.a_base[1] == 0.0, "a_base starts at 0");
     /* body 1 feels -m1 a_base at G1: bitwise the same as F_ext = -m1 a_base */
-    f = m;
-    m.a_base[0] = 3000.0;
-    m.a_base[1] = -1234.5;
-    f.u_in[0] = -m.p.m1 * m.a_base[0];
-    f.u_in[1] = -m.p.m1 * m.a_base[1];
-    csfh_model_derivatives(&m, m.time, x, xdot);
-    csfh_model_derivatives(&f, f.time, x, xf);
+    f = fmu;
+    fmu.m.a_base[0] = 3000.0;
+    fmu.m.a_base[1] = -1234.5;
+    f.m.u_in[0] = -fmu.m.p.m1 * fmu.m.a_base[0];
+    f.m.u_in[1] = -fmu.m.p.m1 * fmu.m.a_base[1];
+    csfh_model_derivatives(&fmu.m, fmu.m.time, x, xdot);
+    csfh_model_derivatives(&f.m, f.m.time, x, xf);
     CHECK_TRUE(memcmp(xdot, xf, sizeof(xdot)) == 0, "a_base is bitwise F_ext = -m1 a_base");
     CHECK_CLOSE(xdot[3], ref[3] - 3000.0, 1e-12, "a_base[1] decelerates body 1 along X");
     CHECK_CLOSE(xdot[4], ref[4] + 1234.5, 1e-12, "a_base[2] < 0 accelerates body 1 along +Y");
     CHECK_ABS(xdot[5], ref[5], 0.0, "the d'Alembert force acts at G1: no moment");
     /* the same smooth forces serve the Moreau stepper and the RK4 baseline */
     double Q[3];
-    csfh_model_smooth_forces(&m, m.time, x, Q);
+    csfh_model_smooth_forces(&fmu.m, fmu.m.time, x, Q);
     double Q0[3];
-    m.a_base[0] = m.a_base[1] = 0.0;
-    csfh_model_smooth_forces(&m, m.time, x, Q0);
-    CHECK_CLOSE(Q[0], Q0[0] - m.p.m1 * 3000.0, 1e-14, "smooth forces: -m1 a_base, X");
-    CHECK_CLOSE(Q[1], Q0[1] + m.p.m1 * 1234.5, 1e-14, "smooth forces: -m1 a_base, Y");
-    csfh_model_derivatives(&m, m.time, x, xdot);
+    fmu.m.a_base[0] = fmu.m.a_base[1] = 0.0;
+    csfh_model_smooth_forces(&fmu.m, fmu.m.time, x, Q0);
+    CHECK_CLOSE(Q[0], Q0[0] - fmu.m.p.m1 * 3000.0, 1e-14, "smooth forces: -m1 a_base, X");
+    CHECK_CLOSE(Q[1], Q0[1] + fmu.m.p.m1 * 1234.5, 1e-14, "smooth forces: -m1 a_base, Y");
+    csfh_model_derivatives(&fmu.m, fmu.m.time, x, xdot);
     CHECK_TRUE(memcmp(xdot, ref, sizeof(xdot)) == 0, "a_base back to 0: bitwise as before");
 
     /* outputs: stresses at the state, the pure functions' values */
-    m.time = 0.0;
-    memcpy(m.x, x, sizeof(m.x));
-    const int rhs_before = m.counters.rhs;
-    csfh_model_outputs(&m);
-    CHECK_INT(m.counters.rhs, rhs_before, "outputs evaluate no right-hand side");
+    fmu.m.time = 0.0;
+    memcpy(fmu.m.x, x, sizeof(fmu.m.x));
+    const int rhs_before = fmu.m.counters.rhs;
+    csfh_fmu_outputs(&fmu);
+    CHECK_INT(fmu.m.counters.rhs, rhs_before, "outputs evaluate no right-hand side");
     double w[3], loc = -1.0;
-    csfh_flexure_tip_wrench(&m.d.flexure, x, w);
-    const double sigma = csfh_arc_stress_max(&m.d.arc, w, &loc);
-    CHECK_ABS(m.out.stress_max, sigma, 0.0, "flexure.stress_max from the tip wrench");
-    CHECK_ABS(m.out.stress_location, loc, 0.0, "flexure.stress_location");
-    CHECK_TRUE(m.out.stress_max > 0.0, "the flexure is loaded");
+    csfh_flexure_tip_wrench(&fmu.m.d.flexure, x, w);
+    const double sigma = csfh_arc_stress_max(&fmu.m.d.arc, w, &loc);
+    CHECK_ABS(fmu.out.stress_max, sigma, 0.0, "flexure.stress_max from the tip wrench");
+    CHECK_ABS(fmu.out.stress_location, loc, 0.0, "flexure.stress_location");
+    CHECK_TRUE(fmu.out.stress_max > 0.0, "the flexure is loaded");
     const double E_star = 1.0 / (2.0 * (1.0 - 0.3 * 0.3) / 210e9), Rc = 0.18 * 0.2 / 0.02;
-    const double p0 = sqrt(m.out.F_N * E_star / (TEST_PI * 0.025 * Rc));
-    CHECK_TRUE(m.out.F_N > 0.0, "in contact");
-    CHECK_CLOSE(m.out.pressure_max, p0, 1e-14, "contact.pressure_max = sqrt(F_N E*/(pi L R'))");
-    CHECK_CLOSE(m.out.half_width, 2.0 * m.out.F_N / (TEST_PI * p0 * 0.025), 1e-14,
+    const double p0 = sqrt(fmu.out.F_N * E_star / (TEST_PI * 0.025 * Rc));
+    CHECK_TRUE(fmu.out.F_N > 0.0, "in contact");
+    CHECK_CLOSE(fmu.out.pressure_max, p0, 1e-14, "contact.pressure_max = sqrt(F_N E*/(pi L R'))");
+    CHECK_CLOSE(fmu.out.half_width, 2.0 * fmu.out.F_N / (TEST_PI * p0 * 0.025), 1e-14,
                 "contact.half_width = 2 F_N/(pi p0 L)");
-    CHECK_ABS(m.out.stress_max_peak, m.out.stress_max, 0.0, "no step: the peak is the value");
-    CHECK_ABS(m.out.pressure_max_peak, m.out.pressure_max, 0.0, "no step: the peak is the value");
-    CHECK_CLOSE(m.out.stress_margin, 1.0 - sigma / m.p.stress_allowable, 1e-15,
+    CHECK_ABS(fmu.out.stress_max_peak, fmu.out.stress_max, 0.0, "no step: the peak is the value");
+    CHECK_ABS(fmu.out.pressure_max_peak, fmu.out.pressure_max, 0.0, "no step: the peak is the value");
+    CHECK_CLOSE(fmu.out.stress_margin, 1.0 - sigma / fmu.m.p.stress_allowable, 1e-15,
                 "flexure.stress_margin = 1 - sigma/allowable");
-    CHECK_CLOSE(m.out.pressure_margin, 1.0 - p0 / m.p.pressure_allowable, 1e-14,
+    CHECK_CLOSE(fmu.out.pressure_margin, 1.0 - p0 / fmu.m.p.pressure_allowable, 1e-14,
                 "contact.pressure_margin = 1 - p0/allowable");
     /* peaks over a step: the contact ones always, the flexure stress only when tracked */
-    m.peaks.active = 1;
-    m.peaks.v[0] = 4.0 * m.out.F_N;
-    m.peaks.v[3] = 3.0 * sigma;
-    csfh_model_outputs(&m);
-    CHECK_CLOSE(m.out.pressure_max_peak, 2.0 * p0, 1e-14, "pressure peak = p0(F_N_peak)");
-    CHECK_ABS(m.out.stress_max_peak, sigma, 0.0, "untracked stress peak: the value");
-    m.p.track_stress_peak = 1;
-    csfh_model_outputs(&m);
-    CHECK_ABS(m.out.stress_max_peak, 3.0 * sigma, 0.0, "tracked stress peak");
-    CHECK_CLOSE(m.out.stress_margin, 1.0 - 3.0 * sigma / m.p.stress_allowable, 1e-15,
+    fmu.peaks.active = 1;
+    fmu.peaks.v[0] = 4.0 * fmu.out.F_N;
+    fmu.peaks.v[3] = 3.0 * sigma;
+    csfh_fmu_outputs(&fmu);
+    CHECK_CLOSE(fmu.out.pressure_max_peak, 2.0 * p0, 1e-14, "pressure peak = p0(F_N_peak)");
+    CHECK_ABS(fmu.out.stress_max_peak, sigma, 0.0, "untracked stress peak: the value");
+    fmu.m.p.track_stress_peak = 1;
+    csfh_fmu_outputs(&fmu);
+    CHECK_ABS(fmu.out.stress_max_peak, 3.0 * sigma, 0.0, "tracked stress peak");
+    CHECK_CLOSE(fmu.out.stress_margin, 1.0 - 3.0 * sigma / fmu.m.p.stress_allowable, 1e-15,
                 "the margin of the peak");
     double v[CSFH_N_PEAKS];
-    m.z.in_contact = 0;
-    CHECK_INT(csfh_model_peak_values(&m, x, v), 1, "tracked stress: evaluated in flight too");
+    fmu.m.z.in_contact = 0;
+    CHECK_INT(csfh_model_peak_values(&fmu.m, x, v), 1, "tracked stress: evaluated in flight too");
     CHECK_ABS(v[3], sigma, 0.0, "peak quantity 3 is the flexure stress");
-    m.peaks.active = 0;
-    m.p.track_stress_peak = 0;
+    fmu.peaks.active = 0;
+    fmu.m.p.track_stress_peak = 0;
     /* zero stress: finite margins of 1; flexure off: no stress, no flexure evaluation */
-    setup_default(&m);
-    m.p.flexure_enabled = 0;
+    setup_default(&fmu);
+    fmu.m.p.flexure_enabled = 0;
     const double x0[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-    memcpy(m.x, x0, sizeof(m.x));
-    const int flex_before = m.counters.flexure;
-    csfh_model_outputs(&m);
-    CHECK_INT(m.counters.flexure, flex_before, "flexure off: never evaluated");
-    CHECK_ABS(m.out.stress_max, 0.0, 0.0, "flexure off: no stress");
-    CHECK_ABS(m.out.pressure_max, 0.0, 0.0, "out of contact: no pressure");
-    CHECK_ABS(m.out.half_width, 0.0, 0.0, "out of contact: no strip");
-    CHECK_ABS(m.out.stress_margin, 1.0, 0.0, "zero stress: margin 1");
-    CHECK_ABS(m.out.pressure_margin, 1.0, 0.0, "zero pressure: margin 1");
+    memcpy(fmu.m.x, x0, sizeof(fmu.m.x));
+    const int flex_before = fmu.m.counters.flexure;
+    csfh_fmu_outputs(&fmu);
+    CHECK_INT(fmu.m.counters.flexure, flex_before, "flexure off: never evaluated");
+    CHECK_ABS(fmu.out.stress_max, 0.0, 0.0, "flexure off: no stress");
+    CHECK_ABS(fmu.out.pressure_max, 0.0, 0.0, "out of contact: no pressure");
+    CHECK_ABS(fmu.out.half_width, 0.0, 0.0, "out of contact: no strip");
+    CHECK_ABS(fmu.out.stress_margin, 1.0, 0.0, "zero stress: margin 1");
+    CHECK_ABS(fmu.out.pressure_margin, 1.0, 0.0, "zero pressure: margin 1");
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -841,58 +841,58 @@ static void test_shock_pulse(void)
     CHECK_CLOSE(sum * T / n / 3.0, 2.0 * A * T / TEST_PI, 1e-12, "integral = 2 A T / pi");
 
     /* in the model: -m1 a(t) along shock.angle at G1, on top of a_base; no moment */
-    csfh_model_t m, ref;
-    setup_default(&m);
-    set_by_name(&m, "shock.peak", A);
-    set_by_name(&m, "shock.duration", T);
-    set_by_name(&m, "shock.start", t0);
-    set_by_name(&m, "shock.angle", 2.0); /* rad */
+    csfh_fmu_t fmu, ref;
+    setup_default(&fmu);
+    set_by_name(&fmu, "shock.peak", A);
+    set_by_name(&fmu, "shock.duration", T);
+    set_by_name(&fmu, "shock.start", t0);
+    set_by_name(&fmu, "shock.angle", 2.0); /* rad */
     char msg[MSG_SIZE] = "";
-    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "a pulse prepares");
+    CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), 0, "a pulse prepares");
     setup_default(&ref);
     const double x[6] = {0.001, -0.002, 0.01, 0.05, -0.02, 0.3};
     double xdot[6], xref[6];
     const double t = t0 + 0.3 * T, a = A * sin(TEST_PI * 0.3);
-    csfh_model_derivatives(&m, t, x, xdot);
-    csfh_model_derivatives(&ref, t, x, xref);
+    csfh_model_derivatives(&fmu.m, t, x, xdot);
+    csfh_model_derivatives(&ref.m, t, x, xref);
     CHECK_CLOSE(xdot[3], xref[3] - a * cos(2.0), 1e-12, "pulse: X acceleration -a cos(angle)");
     CHECK_CLOSE(xdot[4], xref[4] - a * sin(2.0), 1e-12, "pulse: Y acceleration -a sin(angle)");
     CHECK_ABS(xdot[5], xref[5], 0.0, "pulse: no moment");
     /* the integrator's time decides, not the model's: m->time is not read */
-    m.time = t0 + 0.5 * T;
+    fmu.m.time = t0 + 0.5 * T;
     double again[6];
-    csfh_model_derivatives(&m, t, x, again);
+    csfh_model_derivatives(&fmu.m, t, x, again);
     CHECK_TRUE(memcmp(xdot, again, sizeof(xdot)) == 0, "the RHS takes the time it is given");
     /* outside the pulse: bitwise the model without one */
-    csfh_model_derivatives(&m, t0 + T + 1e-6, x, xdot);
-    csfh_model_derivatives(&ref, t0 + T + 1e-6, x, xref);
+    csfh_model_derivatives(&fmu.m, t0 + T + 1e-6, x, xdot);
+    csfh_model_derivatives(&ref.m, t0 + T + 1e-6, x, xref);
     CHECK_TRUE(memcmp(xdot, xref, sizeof(xdot)) == 0, "after the pulse: bitwise no pulse");
     /* with a_base: the frame's acceleration output is their sum */
-    m.a_base[0] = 10.0;
-    m.a_base[1] = -20.0;
+    fmu.m.a_base[0] = 10.0;
+    fmu.m.a_base[1] = -20.0;
     double af[2];
-    csfh_model_frame_acceleration(&m, t, af);
+    csfh_model_frame_acceleration(&fmu.m, t, af);
     CHECK_CLOSE(af[0], 10.0 + a * cos(2.0), 1e-14, "a_frame[1] = a_base[1] + pulse");
     CHECK_CLOSE(af[1], -20.0 + a * sin(2.0), 1e-14, "a_frame[2] = a_base[2] + pulse");
-    m.time = t;
-    memcpy(m.x, x, sizeof(m.x));
-    csfh_model_outputs(&m);
-    CHECK_ABS(m.out.a_frame[0], af[0], 0.0, "output a_frame[1] at the model's time");
-    CHECK_ABS(m.out.a_frame[1], af[1], 0.0, "output a_frame[2] at the model's time");
+    fmu.m.time = t;
+    memcpy(fmu.m.x, x, sizeof(fmu.m.x));
+    csfh_fmu_outputs(&fmu);
+    CHECK_ABS(fmu.out.a_frame[0], af[0], 0.0, "output a_frame[1] at the model's time");
+    CHECK_ABS(fmu.out.a_frame[1], af[1], 0.0, "output a_frame[2] at the model's time");
     /* time events: the start, then the end, then none */
-    CHECK_ABS(csfh_model_next_time_event(&m, 0.0), t0, 0.0, "next time event: the start");
-    CHECK_ABS(csfh_model_next_time_event(&m, t0), t0 + T, 0.0, "at the start: the end");
-    CHECK_ABS(csfh_model_next_time_event(&m, t), t0 + T, 0.0, "inside: the end");
-    CHECK_TRUE(isinf(csfh_model_next_time_event(&m, t0 + T)), "at the end: none");
-    CHECK_TRUE(isinf(csfh_model_next_time_event(&ref, 0.0)), "no pulse: no time event");
+    CHECK_ABS(csfh_model_next_time_event(&fmu.m, 0.0), t0, 0.0, "next time event: the start");
+    CHECK_ABS(csfh_model_next_time_event(&fmu.m, t0), t0 + T, 0.0, "at the start: the end");
+    CHECK_ABS(csfh_model_next_time_event(&fmu.m, t), t0 + T, 0.0, "inside: the end");
+    CHECK_TRUE(isinf(csfh_model_next_time_event(&fmu.m, t0 + T)), "at the end: none");
+    CHECK_TRUE(isinf(csfh_model_next_time_event(&ref.m, 0.0)), "no pulse: no time event");
     /* bad pulse parameters are refused, naming the variable */
-    setup_default(&m);
-    set_by_name(&m, "shock.duration", -1e-4);
-    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), -1, "negative duration refused");
+    setup_default(&fmu);
+    set_by_name(&fmu, "shock.duration", -1e-4);
+    CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), -1, "negative duration refused");
     CHECK_STR_CONTAINS(msg, "shock.duration", "names shock.duration");
-    setup_default(&m);
-    set_by_name(&m, "shock.peak", -1.0);
-    CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), -1, "negative peak refused");
+    setup_default(&fmu);
+    set_by_name(&fmu, "shock.peak", -1.0);
+    CHECK_INT(csfh_fmu_prepare(&fmu, msg, sizeof(msg)), -1, "negative peak refused");
     CHECK_STR_CONTAINS(msg, "shock.peak", "names shock.peak");
 }
 

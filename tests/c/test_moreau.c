@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "csfh_fmu.h"
 #include "csfh_model.h"
 #include "csfh_moreau.h"
 #include "csfh_test.h"
@@ -26,7 +27,7 @@
 static void make_model(csfh_model_t *m, int friction, double cr, double s1x, double s1y)
 {
     char msg[256] = "";
-    csfh_model_set_defaults(m);
+    csfh_fmu_model_defaults(m);
     m->p.flexure_enabled = 0;
     m->p.friction_enabled = friction;
     m->p.cr = cr;

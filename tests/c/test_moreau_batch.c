@@ -1,4 +1,4 @@
-/* The batched Moreau entry point (csfh_moreau_batch.c): every variant of a batch equals, bit for
+/* The batched Moreau runs (csfh_moreau_batch.c): every variant of a batch equals, bit for
  * bit, the single run of csfh_moreau_run with the same model, whatever its place in the batch;
  * the buffers of one variant never touch another's (run under ASan); bad arguments are refused. */
 #include <math.h>
@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "csfh_fmu.h"
 #include "csfh_model.h"
 #include "csfh_moreau_batch.h"
 #include "csfh_test.h"
@@ -19,7 +20,7 @@
 static void make_model(csfh_model_t *m, double R1, double h_beam)
 {
     char msg[256] = "";
-    csfh_model_set_defaults(m);
+    csfh_fmu_model_defaults(m);
     m->p.R1 = R1;
     m->p.h = h_beam;
     CHECK_INT(csfh_model_prepare(m, msg, sizeof(msg)), 0, TFMT("prepare: %s", msg));
@@ -43,7 +44,7 @@ int main(void)
     double x_end[N_VAR * 6];
     long long stats[N_VAR * CSFH_MOREAU_BATCH_NSTATS];
     int status[N_VAR];
-    const long long failed = csfh_api_moreau_batch(handles, N_VAR, 1e-5, CSFH_STICK_PAPER, 0.0,
+    const long long failed = csfh_moreau_batch(handles, N_VAR, 1e-5, CSFH_STICK_PAPER, 0.0,
                                                    1e-9, 0.0, 0.0, x0s, N_STEPS, EVERY, rec,
                                                    MAX_REC, imp, MAX_IMP, x_end, stats, status);
     CHECK_INT((int)failed, 0, "no variant fails");
@@ -80,14 +81,14 @@ int main(void)
     CHECK_TRUE(t_imp1 < t_imp0, "a smaller clearance (R1 + 1 mm) touches earlier");
 
     /* bad arguments */
-    CHECK_INT((int)csfh_api_moreau_batch(NULL, N_VAR, 1e-5, 1, 0, 0, 0, 0, x0s, 10, 1, rec,
+    CHECK_INT((int)csfh_moreau_batch(NULL, N_VAR, 1e-5, 1, 0, 0, 0, 0, x0s, 10, 1, rec,
                                          MAX_REC, imp, MAX_IMP, x_end, stats, status),
               -1, "NULL models refused");
-    CHECK_INT((int)csfh_api_moreau_batch(handles, N_VAR, 1e-5, 1, 0, 0, 0, 0, x0s, 10, 1, NULL,
+    CHECK_INT((int)csfh_moreau_batch(handles, N_VAR, 1e-5, 1, 0, 0, 0, 0, x0s, 10, 1, NULL,
                                          MAX_REC, imp, MAX_IMP, x_end, stats, status),
               -1, "NULL records with a size refused");
     /* no records and no impacts are allowed */
-    CHECK_INT((int)csfh_api_moreau_batch(handles, N_VAR, 1e-5, 1, 0, 0, 0, 0, x0s, 10, 1, NULL, 0,
+    CHECK_INT((int)csfh_moreau_batch(handles, N_VAR, 1e-5, 1, 0, 0, 0, 0, x0s, 10, 1, NULL, 0,
                                          NULL, 0, x_end, stats, status),
               0, "outputs optional");
     free(rec);

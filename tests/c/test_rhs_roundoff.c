@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "csfh_common.h"
+#include "csfh_fmu.h"
 #include "csfh_friction.h"
 #include "csfh_model.h"
 #include "csfh_test.h"
@@ -95,7 +96,7 @@ static void test_rhs(double s1x, double s1y)
 {
     csfh_model_t m;
     char msg[512];
-    csfh_model_set_defaults(&m);
+    csfh_fmu_model_defaults(&m);
     m.p.law = CSFH_CONTACTLAW_LN_SPHERES;
     m.p.s1bar[0] = s1x;
     m.p.s1bar[1] = s1y;
@@ -150,7 +151,7 @@ static void test_energy(void)
 {
     csfh_model_t m;
     char msg[512];
-    csfh_model_set_defaults(&m);
+    csfh_fmu_model_defaults(&m);
     m.p.law = CSFH_CONTACTLAW_LN_SPHERES;
     CHECK_INT(csfh_model_prepare(&m, msg, sizeof(msg)), 0, "prepare");
     for (double rho = 1e-9; rho < 1e-3; rho *= 3.7) {

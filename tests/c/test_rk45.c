@@ -1,4 +1,4 @@
-/* The explicit Runge-Kutta 5(4) of the co-simulation FMU (fmu_src/fmi/rk45.c), against
+/* The explicit Runge-Kutta 5(4) of the co-simulation FMU (fmu_src/solvers/rk45.c), against
  * analytic solutions: exponential decay and a harmonic oscillator (solution, dense output and
  * its derivative, the error's fall with the tolerance), roots of the oscillator's position at
  * the known instants (one per call, also several inside one step), a restart at a root with a

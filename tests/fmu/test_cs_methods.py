@@ -25,10 +25,10 @@ KEPT = "auto: BDF kept"  # ... when BDF's trial steps are long enough
 BACK = "auto: back to RK45"  # ... when they are not
 
 
-AUTO_WINDOW = 100  # integrator steps per decision of auto (cosimulation.c)
+AUTO_WINDOW = 100  # integrator steps per decision of auto (auto_policy.c)
 
 
-AUTO_BDF_COST = 2.0  # a BDF step costs that many RK45 steps (cosimulation.c, model §10.7)
+AUTO_BDF_COST = 2.0  # a BDF step costs that many RK45 steps (auto_policy.c, model §10.7)
 
 
 def steps_and_log(

@@ -196,7 +196,7 @@ def test_me_steps_the_time_cannot_resolve_are_reported(
 # the communication point: the FMU's time up to round-off, never backwards
 
 
-ROUNDOFF = 16 * np.finfo(float).eps  # the rule of fmi2DoStep (fmu_instance.c: COMM_POINT_ROUNDOFF)
+ROUNDOFF = 16 * np.finfo(float).eps  # the rule of fmi2DoStep (fmu_step.c: COMM_POINT_ROUNDOFF)
 
 
 def stepped_to(make_fmu: MakeFmu, vr: dict[str, int], t1: float) -> tuple[FMU2Slave, Any, float]:

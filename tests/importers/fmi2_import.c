@@ -96,16 +96,6 @@ static void *allocate(size_t n, size_t size)
     return calloc(n, size);
 }
 
-#define LOAD(field, required)                                                                  \
-    do {                                                                                       \
-        imp_function_t f_ = imp_symbol(&imp->run, "fmi2" #field);                              \
-        if (f_ == NULL && (required)) {                                                        \
-            imp_die(program, "fmi2" #field " not found in the binary of %s",                   \
-                    imp->run.opt.fmu_dir);                                                     \
-        }                                                                                      \
-        imp->api.field = (fmi2##field##TYPE *)f_;                                              \
-    } while (0)
-
 void imp_open(importer_t *imp, int argc, char **argv, fmi2Type kind, const char *program)
 {
     memset(imp, 0, sizeof(*imp));
@@ -142,36 +132,12 @@ void imp_open(importer_t *imp, int argc, char **argv, fmi2Type kind, const char 
         }
     }
     imp_load_library(&imp->run, IMP_PLATFORM, program);
-    LOAD(Instantiate, 1);
-    LOAD(FreeInstance, 1);
-    LOAD(SetupExperiment, 1);
-    LOAD(EnterInitializationMode, 1);
-    LOAD(ExitInitializationMode, 1);
-    LOAD(Terminate, 1);
-    LOAD(SetReal, 1);
-    LOAD(SetInteger, 1);
-    LOAD(SetBoolean, 1);
-    LOAD(GetReal, 1);
-    LOAD(GetInteger, 1);
-    LOAD(GetBoolean, 1);
-    LOAD(GetFMUstate, 0);
-    LOAD(SetFMUstate, 0);
-    LOAD(FreeFMUstate, 0);
-    LOAD(SerializedFMUstateSize, 0);
-    LOAD(SerializeFMUstate, 0);
-    LOAD(DeSerializeFMUstate, 0);
-    const int me = kind == fmi2ModelExchange;
-    LOAD(EnterEventMode, me);
-    LOAD(NewDiscreteStates, me);
-    LOAD(EnterContinuousTimeMode, me);
-    LOAD(CompletedIntegratorStep, me);
-    LOAD(SetTime, me);
-    LOAD(SetContinuousStates, me);
-    LOAD(GetDerivatives, me);
-    LOAD(GetEventIndicators, me);
-    LOAD(GetContinuousStates, me);
-    LOAD(GetNominalsOfContinuousStates, me);
-    LOAD(DoStep, !me);
+    const unsigned int required =
+        FMI2_API_COMMON | (kind == fmi2ModelExchange ? FMI2_API_ME : FMI2_API_CS);
+    const char *missing = fmi2_api_load(&imp->api, imp->run.library, required);
+    if (missing != NULL) {
+        imp_die(program, "%s not found in the binary of %s", missing, imp->run.opt.fmu_dir);
+    }
     imp_open_results(&imp->run, program);
 }
 

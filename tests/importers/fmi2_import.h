@@ -8,46 +8,13 @@
 
 #include <stdio.h>
 
+#include "fmi2_api.h"
 #include "fmi2FunctionTypes.h"
 #include "import_common.h"
 
 typedef struct {
-    fmi2InstantiateTYPE *Instantiate;
-    fmi2FreeInstanceTYPE *FreeInstance;
-    fmi2SetupExperimentTYPE *SetupExperiment;
-    fmi2EnterInitializationModeTYPE *EnterInitializationMode;
-    fmi2ExitInitializationModeTYPE *ExitInitializationMode;
-    fmi2TerminateTYPE *Terminate;
-    fmi2SetRealTYPE *SetReal;
-    fmi2SetIntegerTYPE *SetInteger;
-    fmi2SetBooleanTYPE *SetBoolean;
-    fmi2GetRealTYPE *GetReal;
-    fmi2GetIntegerTYPE *GetInteger;
-    fmi2GetBooleanTYPE *GetBoolean;
-    fmi2GetFMUstateTYPE *GetFMUstate;
-    fmi2SetFMUstateTYPE *SetFMUstate;
-    fmi2FreeFMUstateTYPE *FreeFMUstate;
-    fmi2SerializedFMUstateSizeTYPE *SerializedFMUstateSize;
-    fmi2SerializeFMUstateTYPE *SerializeFMUstate;
-    fmi2DeSerializeFMUstateTYPE *DeSerializeFMUstate;
-    /* model exchange */
-    fmi2EnterEventModeTYPE *EnterEventMode;
-    fmi2NewDiscreteStatesTYPE *NewDiscreteStates;
-    fmi2EnterContinuousTimeModeTYPE *EnterContinuousTimeMode;
-    fmi2CompletedIntegratorStepTYPE *CompletedIntegratorStep;
-    fmi2SetTimeTYPE *SetTime;
-    fmi2SetContinuousStatesTYPE *SetContinuousStates;
-    fmi2GetDerivativesTYPE *GetDerivatives;
-    fmi2GetEventIndicatorsTYPE *GetEventIndicators;
-    fmi2GetContinuousStatesTYPE *GetContinuousStates;
-    fmi2GetNominalsOfContinuousStatesTYPE *GetNominalsOfContinuousStates;
-    /* co-simulation */
-    fmi2DoStepTYPE *DoStep;
-} imp_api_t;
-
-typedef struct {
     imp_run_t run; /* options, model description, results (import_common.h) */
-    imp_api_t api;
+    fmi2_api_t api; /* the FMU's functions (fmu_src/masters/fmi2_api.h) */
     fmi2CallbackFunctions callbacks;
     fmi2Component c;
 } importer_t;

@@ -10,54 +10,17 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* ------------------------------------------------------------------------------------------ */
-/* the one platform-specific part: shared libraries */
-
-#if defined(_WIN32)
-#include <windows.h>
-#define IMP_SUFFIX ".dll"
-static void *library_open(const char *path)
-{
-    return (void *)LoadLibraryA(path);
-}
 imp_function_t imp_symbol(const imp_run_t *run, const char *name)
 {
-    return (imp_function_t)(void (*)(void))GetProcAddress((HMODULE)run->library, name);
+    return fmu_library_symbol(run->library, name);
 }
-static void library_close(void *library)
-{
-    FreeLibrary((HMODULE)library);
-}
-#else
-#include <dlfcn.h>
-#if defined(__APPLE__)
-#define IMP_SUFFIX ".dylib"
-#else
-#define IMP_SUFFIX ".so"
-#endif
-static void *library_open(const char *path)
-{
-    return dlopen(path, RTLD_NOW | RTLD_LOCAL);
-}
-imp_function_t imp_symbol(const imp_run_t *run, const char *name)
-{
-    void *p = dlsym(run->library, name);
-    imp_function_t f;
-    memcpy(&f, &p, sizeof(f)); /* POSIX: object and function pointers have the same form */
-    return f;
-}
-static void library_close(void *library)
-{
-    dlclose(library);
-}
-#endif
 
 void imp_load_library(imp_run_t *run, const char *platform, const char *program)
 {
     char path[4096];
     snprintf(path, sizeof(path), "%s/binaries/%s/%s%s", run->opt.fmu_dir, platform,
-             run->md.model_identifier, IMP_SUFFIX);
-    run->library = library_open(path);
+             run->md.model_identifier, FMU_LIBRARY_SUFFIX);
+    run->library = fmu_library_open(path);
     if (run->library == NULL) {
         imp_die(program, "cannot load %s", path);
     }
@@ -357,7 +320,7 @@ int imp_finish(imp_run_t *run)
         fclose(run->events);
     }
     if (run->library != NULL) {
-        library_close(run->library);
+        fmu_library_close(run->library);
     }
     free(run->md.xml);
     return ok ? 0 : 1;

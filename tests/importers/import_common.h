@@ -1,11 +1,10 @@
 /* The FMI-version-independent part of the conformance importers (tests/importers/), shared by the
  * FMI 2.0 loader (fmi2_import.c) and the FMI 3.0 loader (fmi3_import.c): the command line, the
- * scanning of modelDescription.xml, the shared-library shim, and the results (CSV, events,
- * summary).
+ * scanning of modelDescription.xml, loading the binary, and the results (CSV, events, summary).
  *
- * Portable C11: the only platform-specific code is the shared-library shim in import_common.c
- * (dlopen / LoadLibrary); everything else is the C standard library, so the importers build for
- * linux64 and win64 alike.
+ * Portable C11: the only platform-specific code is the masters' shared-library shim
+ * (fmu_src/masters/fmu_library.c: dlopen / LoadLibrary); everything else is the C standard
+ * library, so the importers build for linux64 and win64 alike.
  *
  * Common command line of every importer (FMI 2.0 and FMI 3.0):
  *
@@ -35,6 +34,8 @@
 
 #include <stddef.h>
 #include <stdio.h>
+
+#include "fmu_library.h"
 
 #define IMP_MAX_OUTPUTS 32
 #define IMP_MAX_STARTS 64
@@ -79,7 +80,7 @@ typedef struct {
     char output_name_storage[IMP_MAX_OUTPUTS][256];
 } imp_run_t;
 
-typedef void (*imp_function_t)(void);
+typedef fmu_library_function_t imp_function_t;
 
 /* Print "program: message" and exit with status 2 (bad command line or FMU directory). */
 void imp_die(const char *program, const char *fmt, ...)

@@ -9,6 +9,8 @@ import ast
 import json
 import os
 import signal
+import subprocess
+import sys
 import textwrap
 from pathlib import Path
 
@@ -264,6 +266,22 @@ def test_plot_replaces_the_figures_and_keeps_the_tables(
     assert tables and all(after[rel] == before[rel] for rel in tables)
     manifest = json.loads(after[".csfh/compare.json"])
     assert set(manifest["files"]) == visible(out)
+
+
+def test_temporary_files_of_killed_processes_in_the_state_directory_are_removed(
+    first: tuple[Path, dict[str, bytes]], tmp_path: Path
+) -> None:
+    out = copy_of(first, tmp_path)
+    ended = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                           capture_output=True, text=True, check=True)  # fmt: skip
+    dead = int(ended.stdout)
+    stale = out / ".csfh" / f".compare.json.{dead}.140213.tmp"
+    live = out / ".csfh" / f".compare.json.{os.getpid()}.140213.tmp"  # being written
+    theirs = out / f".notes.txt.{dead}.1.tmp"  # not csfh's state: the user's
+    for path in (stale, live, theirs):
+        path.write_text("half a file")
+    replot(out)
+    assert [p.exists() for p in (stale, live, theirs)] == [False, True, True]
 
 
 def test_runs_of_different_models_keep_each_others_files(tmp_path: Path) -> None:

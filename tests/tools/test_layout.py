@@ -18,18 +18,19 @@ LAYERS: dict[str, int] = {
     "csfh._version": 0,
     "csfh.errors": 0,  # below the rest of the foundation: every module raises its types
     "csfh.paths": 1,
-    "csfh.output": 1,
     "csfh.progress": 1,
     "csfh.scenes": 1,
-    "csfh.trajectory": 2,
-    "csfh.plotting": 2,
-    "csfh.model": 3,
-    "csfh.runners": 4,
-    "csfh.batch": 5,
-    "csfh.cosim": 5,
-    "csfh.studies": 6,
-    "csfh.cli": 7,
-    "csfh": 8,  # the package's face (__init__, __main__)
+    "csfh.safepath": 1,  # the output folders' path checks, under output
+    "csfh.output": 2,
+    "csfh.trajectory": 3,
+    "csfh.plotting": 3,
+    "csfh.model": 4,
+    "csfh.runners": 5,
+    "csfh.batch": 6,
+    "csfh.cosim": 6,
+    "csfh.studies": 7,
+    "csfh.cli": 8,
+    "csfh": 9,  # the package's face (__init__, __main__)
 }
 """Rank of each part: a module may import only from parts of a lower rank, and from its own part."""
 
@@ -177,8 +178,25 @@ def test_imports_go_down_the_layers(module: str) -> None:
 # ------------------------------------------------------------------------------------------
 # C: the same rule for the C sources of the FMUs and the libraries. A source file depends on
 # another when its object file uses a symbol the other one defines (nm on the build's objects:
-# the calls that really link, whatever the headers say); the FMI front-ends -> the stepper ->
-# the FMI-independent instance -> the model and the physics, never back.
+# the calls that really link, whatever the headers say); the FMI front-ends -> the
+# co-simulation stepper -> the FMI-independent instance -> the model (through its table
+# fmu_model) -> the solvers and the physics, never back.
+
+C_LAYERS: dict[str, int] = {
+    "fmu_src/common": 0,  # formatting shared by every layer
+    "fmu_src/fmu/csfh_vartable.c": 1,  # the value tables the models describe themselves with
+    "fmu_src/physics": 1,
+    "fmu_src/solvers": 2,
+    "fmu_src/models": 3,
+    "fmu_src/harness": 4,  # libcsfh_core's ctypes API over the physics and the solvers
+    "fmu_src/fmu": 4,  # the instance: life cycle, values, FMU state, model exchange
+    "fmu_src/fmu/cosim": 5,  # the co-simulation stepper, its integrators and policy
+    "fmu_src/fmu/fmi2": 6,
+    "fmu_src/fmu/fmi3": 6,
+    "fmu_src/masters": 7,  # load an FMU's binary at run time; link none of the above
+}
+"""Rank of each part of fmu_src/ (the longest matching folder or file): a source may use only
+sources of a lower rank, and of its own part."""
 
 BUILD = PACKAGE.parents[1] / "build"
 C_TARGETS = (
@@ -249,13 +267,61 @@ def test_the_c_symbol_graph_finds_a_cycle(tmp_path: Path) -> None:
     assert cycles(graph) == [["a.c", "b.c"]]
 
 
-def test_no_cycles_between_the_c_sources() -> None:
+def c_part(source: str) -> str:
+    """The part of C_LAYERS a source belongs to (the longest matching prefix)."""
+    parts = source.split("/")
+    while "/".join(parts) not in C_LAYERS:
+        parts.pop()
+        if not parts:
+            raise KeyError(f"{source} is in no part of C_LAYERS: add it")
+    return "/".join(parts)
+
+
+@cache
+def c_graph() -> dict[str, set[str]]:
     objects = build_objects()
-    if "fmu_src/fmi/fmu_instance.c" not in objects:
+    if "fmu_src/fmu/fmu_instance.c" not in objects:
         pytest.skip(f"no current build of the FMUs in {BUILD}")
-    graph = c_symbol_graph(objects)
-    assert len(graph) >= 12, sorted(graph)
-    # the front-ends use the stepper, the stepper the instance, the instance the model
-    assert "fmu_src/fmi/cosimulation.c" in graph["fmu_src/fmi/fmi2_glue.c"]
-    assert "fmu_src/fmi/fmu_instance.c" in graph["fmu_src/fmi/cosimulation.c"]
+    return c_symbol_graph(objects)
+
+
+def test_no_cycles_between_the_c_sources() -> None:
+    graph = c_graph()
+    assert len(graph) >= 30, sorted(graph)
+    # the front-ends use the stepper, the stepper the instance and its integrators, those the
+    # solvers, the instance the model's table
+    assert "fmu_src/fmu/cosim/cosimulation.c" in graph["fmu_src/fmu/fmi2/fmi2_glue.c"]
+    assert "fmu_src/fmu/cosim/cosimulation.c" in graph["fmu_src/fmu/fmi3/fmi3_glue.c"]
+    assert "fmu_src/fmu/fmu_instance.c" in graph["fmu_src/fmu/cosim/cosimulation.c"]
+    assert "fmu_src/solvers/rk45.c" in graph["fmu_src/fmu/cosim/integrator_rk45.c"]
+    assert any(s.startswith("fmu_src/models/") for s in graph["fmu_src/fmu/fmu_instance.c"])
     assert cycles(graph) == []
+
+
+def c_layer_violations(graph: dict[str, set[str]]) -> list[str]:
+    """Every use of a source of the same or a higher layer in another part."""
+    return [
+        f"{source} ({c_part(source)}, layer {C_LAYERS[c_part(source)]}) uses {target} "
+        f"({c_part(target)}, layer {C_LAYERS[c_part(target)]})"
+        for source in sorted(graph)
+        for target in sorted(graph[source])
+        if c_part(target) != c_part(source) and C_LAYERS[c_part(target)] >= C_LAYERS[c_part(source)]
+    ]
+
+
+def test_the_c_sources_go_down_the_layers() -> None:
+    assert c_layer_violations(c_graph()) == []
+
+
+def test_a_c_source_using_a_higher_layer_is_found() -> None:
+    graph = {
+        "fmu_src/fmu/cosim/integration.c": {"fmu_src/fmu/fmu_log.c", "fmu_src/solvers/rk45.c"},
+        "fmu_src/physics/csfh_model.c": {"fmu_src/fmu/csfh_vartable.c"},
+        "fmu_src/fmu/fmu_log.c": {"fmu_src/fmu/fmu_instance.c"},
+    }
+    assert c_layer_violations(graph) == [
+        "fmu_src/physics/csfh_model.c (fmu_src/physics, layer 1) uses "
+        "fmu_src/fmu/csfh_vartable.c (fmu_src/fmu/csfh_vartable.c, layer 1)"
+    ]
+    with pytest.raises(KeyError, match="no part"):
+        c_part("elsewhere/a.c")

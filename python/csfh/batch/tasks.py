@@ -12,10 +12,14 @@ run one at a time."""
 
 from __future__ import annotations
 
+import ctypes
 import hashlib
 import json
+import os
 import signal
+import sys
 import threading
+import time
 from collections.abc import Sequence
 from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field
@@ -32,6 +36,12 @@ from ..runners.registry import Runner, TrajectoryRuns, runner_for
 
 SCHEMA = 3  # 2: forces of the event-driven runs as interval peaks; 3: co-simulation summaries
 # from the FMU's peak outputs and contact count, stress peaks
+KEY_DIGITS = 24
+"""Hexadecimal digits of a task key (`task_key`)."""
+SUMMARY_KEYS = ("first_contact", "contacts", "peak_F_N", "peak_abs_F_T", "steps")
+"""What every task summary holds (`_summary`; co-simulation adds the stress peaks): the first
+contact time in s (None: no contact), the number of contacts, the peak normal and tangential
+force in N, and the integrator steps."""
 _FMU_LOCK = threading.Lock()  # fmpy instances in one process: one run at a time (Dask threads)
 
 
@@ -118,7 +128,7 @@ def task_key(task: Task) -> str:
         "signals": task.signals,
     }
     text = json.dumps(spec, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()[:24]
+    return hashlib.sha256(text.encode()).hexdigest()[:KEY_DIGITS]
 
 
 def grid(stop_time: float, output_interval: float) -> np.ndarray:
@@ -142,13 +152,8 @@ def _summary(
     steps: int,
     stresses: tuple[float, float] | None = None,
 ) -> dict[str, Any]:
-    out: dict[str, Any] = {
-        "first_contact": first,
-        "contacts": int(contacts),
-        "peak_F_N": float(peak_fn),
-        "peak_abs_F_T": float(peak_ft),
-        "steps": int(steps),
-    }
+    values = (first, int(contacts), float(peak_fn), float(peak_ft), int(steps))
+    out: dict[str, Any] = dict(zip(SUMMARY_KEYS, values, strict=True))
     if stresses is not None:  # co-simulation: the peak flexure stress and contact pressure, Pa
         out["peak_flexure_stress"] = float(stresses[0])
         out["peak_contact_pressure"] = float(stresses[1])
@@ -243,10 +248,39 @@ def batchable(tasks: Sequence[Task]) -> bool:
     return group is not None and all(batch_group(t) == group for t in tasks)
 
 
-def worker_init() -> None:
+def worker_init(parent: int | None = None) -> None:
     """Ctrl-C goes to the whole process group: a worker ignores it and the parent decides (it
     keeps what is done and ends the workers). The parent starts workers with SIGINT blocked, so
-    that one during the start-up is discarded here too."""
+    that one during the start-up is discarded here too. With `parent` (the parent's process
+    id) the worker also ends when its parent does (`end_with_parent`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     if hasattr(signal, "pthread_sigmask"):
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    if parent is not None:
+        end_with_parent(parent)
+
+
+_PR_SET_PDEATHSIG = 1  # <sys/prctl.h>
+
+
+def end_with_parent(parent: int) -> None:
+    """End this process when the process `parent` ends, even by SIGKILL, which gives it no
+    chance to end its workers: a worker would otherwise wait for work forever, and keep
+    multiprocessing's resource tracker alive with it. On Linux at once (the kernel's
+    parent-death signal, prctl PR_SET_PDEATHSIG); everywhere within a second (a thread that
+    watches the parent's process id, which changes when the parent is gone)."""
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):  # no prctl: the thread alone
+            pass
+    if os.getppid() != parent:  # ended before the signal was asked for
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
+
+
+def _watch_parent(parent: int) -> None:
+    while os.getppid() == parent:
+        time.sleep(0.5)
+    os._exit(1)

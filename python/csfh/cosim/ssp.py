@@ -56,6 +56,7 @@ from ..model.scene import Scene, load_scene
 from ..output import write_bytes
 from ..paths import combdrive_fmu_path, fmu_path
 from ..runners.fmu import OUTPUT_NAMES, STATE_NAMES
+from ..safepath import check_target
 from .coupling import ACTUATOR_COLUMNS, CosimError, actuator_start_values, csfh_start_values
 
 NS = {
@@ -333,6 +334,7 @@ def write_ssp(
     path = Path(path)
     if not path.parent.is_dir():
         raise ResultsError(f"{path}: the directory {path.parent} does not exist")
+    check_target(path)  # a device, FIFO or directory is refused before the archive is built
     data = ssp_bytes(scene, step=step, stop_time=stop_time)
     return write_bytes(path, data)
 

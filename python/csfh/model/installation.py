@@ -55,8 +55,7 @@ def fmu_details(path: Path) -> str:
     except (OSError, KeyError, zipfile.BadZipFile, ElementTree.ParseError) as exc:
         return f"not a readable FMU ({exc})"
     platforms = sorted(
-        {n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2}
-        - {""}
+        {n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2} - {""}
     )
     interfaces = [i for i in ("ModelExchange", "CoSimulation") if root.find(i) is not None]
     sources = ", sources" if any(n.startswith("sources/") for n in names) else ""

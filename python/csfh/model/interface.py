@@ -118,7 +118,7 @@ class Interface:
 
     def check(self, name: str, value: float) -> None:
         """ParameterError naming the variable and the value, in the FMU's words, when the FMU
-        would refuse `value` for variable `name` (fmu_src/core/csfh_vartable.c)."""
+        would refuse `value` for variable `name` (fmu_src/fmu/csfh_vartable.c)."""
         v = self.by_name[name]
         if not math.isfinite(value):
             raise ParameterError(f"{name} = {value:g} is not finite")

@@ -1,5 +1,5 @@
 """Batched co-simulation runs: many parameter sets of one scene and contact law in one call into
-the batch master (libcsfh_batch.so, fmu_src/batch/csfh_cs_batch.c).
+the batch master (libcsfh_batch.so, fmu_src/masters/csfh_cs_batch.c).
 
 The master loads the FMU's own binary (the one `simulate_cs` loads) and drives it through its
 fmi2 functions exactly as `simulate_cs` does: the same start values in the same order

@@ -1,6 +1,6 @@
 """The communication loop of `simulate_cs` in C: fmi2DoStep and the reads of fixed sets of
 outputs for a chunk of communication steps in one ctypes call (csfh_cs_steps in the batch library
-libcsfh_batch.so, fmu_src/batch/csfh_cs_steps.c), on our instance of the FMU
+libcsfh_batch.so, fmu_src/masters/csfh_cs_steps.c), on our instance of the FMU
 (`fmi2_slave.Fmi2Slave`: the addresses of its binary's fmi2 functions and of the instance).
 
 From Python, every FMI call through ctypes costs about 1 us beyond the FMU's own work (the call,

@@ -7,7 +7,7 @@ apply. Contact onsets and releases are recorded at the located event instants.
 
 Peaks: the largest normal force and indentation of each contact are searched here, on CVODE's
 interpolant (`_MeRun.refine_peaks`), while a co-simulation run gets them from the FMU, whose C
-search (fmu_src/fmi/cosimulation.c) runs on its own integrator's dense output. One algorithm
+search (fmu_src/models/csfh/csfh_peaks.c) runs on its own integrator's dense output. One algorithm
 cannot serve both: in model exchange the integrator and its interpolant are the importer's, and
 the FMU only evaluates the states it is given, so the search must run where the interpolant is;
 the FMU's search works on its stepper's internal data and is not reachable from outside (the

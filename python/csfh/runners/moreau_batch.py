@@ -1,5 +1,5 @@
 """Batched Moreau runs: many parameter sets of one scene in one call into the C core
-(csfh_api_moreau_batch, fmu_src/core/csfh_moreau_batch.c).
+(csfh_api_moreau_batch, fmu_src/solvers/csfh_moreau_batch.c).
 
 Each variant is integrated by the same C function as `csfh.moreau` (csfh_moreau_run), so a
 batched trajectory is bitwise the single run's. What the batch saves is the per-run overhead of

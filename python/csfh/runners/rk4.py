@@ -1,7 +1,7 @@
 """The paper's own event-driven scheme as a baseline: explicit RK4 with a nominal step h0 (paper:
 2e-4 s), bisection of the step until the penetration at the contact onset is within the event
 tolerance (paper: 1e-4 m), the reduced step kept through the contact. It runs in the C core
-(fmu_src/core/csfh_rk4event.c) with the FMU's right-hand side, so that its cost can be compared
+(fmu_src/solvers/csfh_rk4event.c) with the FMU's right-hand side, so that its cost can be compared
 with the FMU's integrators evaluation for evaluation."""
 
 from __future__ import annotations

@@ -1,0 +1,196 @@
+/* The csfh model behind the generic FMU layer (../../fmu/fmu_model.h): the physics'
+ * functions on the FMU's model struct (csfh_fmu.h) and the generated variable table, the log
+ * messages of contact events, the co-simulation method and the peak outputs (csfh_peaks.c). */
+#include <math.h>
+#include <stdio.h>
+
+#include "csfh_constants.h"
+#include "csfh_fmu.h"
+#include "csfh_peaks.h"
+#include "csfh_variables.h"
+#include "fmu_model.h"
+
+#define MODEL(p) (&((csfh_fmu_t *)(p))->m)
+#define CONST_MODEL(p) (&((const csfh_fmu_t *)(p))->m)
+
+static void set_defaults(void *f)
+{
+    csfh_fmu_set_defaults((csfh_fmu_t *)f);
+}
+
+static int prepare(void *f, char *msg, size_t msg_size)
+{
+    return csfh_fmu_prepare((csfh_fmu_t *)f, msg, msg_size);
+}
+
+static int check_start(void *f, char *msg, size_t msg_size)
+{
+    /* called once, at fmi2ExitInitializationMode (the glue restores the model if refused) */
+    csfh_model_apply_initial_parameters(MODEL(f));
+    return csfh_model_check_start(CONST_MODEL(f), msg, msg_size);
+}
+
+static void init_discrete(void *f, char *msg, size_t msg_size)
+{
+    csfh_model_t *m = MODEL(f);
+    csfh_model_init_discrete(m);
+    if (m->z.in_contact) {
+        snprintf(msg, msg_size, "t = %.17g: starts in contact", m->time);
+    } else if (msg_size > 0) {
+        msg[0] = '\0';
+    }
+}
+
+static int derivatives(void *f, double t, const double *x, double *xdot)
+{
+    const int status = csfh_model_derivatives(MODEL(f), t, x, xdot);
+    if (status == CSFH_ERR_NONFINITE) {
+        return FMU_MODEL_NONFINITE;
+    }
+    return status == CSFH_WARN_ESDU_CLAMPED ? FMU_MODEL_WARNING : FMU_MODEL_OK;
+}
+
+static double next_time_event(const void *f, double t)
+{
+    return csfh_model_next_time_event(CONST_MODEL(f), t);
+}
+
+static void event_indicators(const void *f, const double *x, double *z)
+{
+    z[0] = csfh_model_event_indicator(CONST_MODEL(f), x);
+}
+
+static int event_update(void *f, char *msg, size_t msg_size)
+{
+    csfh_model_t *m = MODEL(f);
+    const int change = csfh_model_event_update(m);
+    if (msg_size == 0) {
+        return change; /* not logged: nothing to format */
+    }
+    if (change == 1) {
+        snprintf(msg, msg_size, "t = %.17g: contact %d starts, onset indentation rate %g m/s",
+                 m->time, m->z.contact_count, m->z.onset_speed);
+    } else if (change == 2) {
+        snprintf(msg, msg_size, "t = %.17g: contact ends", m->time);
+    } else {
+        msg[0] = '\0';
+    }
+    return change;
+}
+
+static int outputs(void *fv, char *msg, size_t msg_size)
+{
+    csfh_fmu_t *f = (csfh_fmu_t *)fv;
+    const int status = csfh_fmu_outputs(f);
+    const csfh_outputs_t *o = &f->out;
+    const double values[] = {o->F_N, o->F_T, o->indentation, o->gap, o->v_T,
+                             o->indentation_rate, o->E_total, o->F_N_peak, o->F_T_peak,
+                             o->indentation_peak, o->stress_max, o->stress_location,
+                             o->stress_max_peak, o->stress_margin, o->pressure_max,
+                             o->half_width, o->pressure_max_peak, o->pressure_margin,
+                             o->a_frame[0], o->a_frame[1]};
+    for (size_t i = 0; i < sizeof(values) / sizeof(values[0]); i++) {
+        if (!isfinite(values[i])) {
+            snprintf(msg, msg_size, "non-finite output at t = %.17g", f->m.time);
+            return FMU_MODEL_NONFINITE;
+        }
+    }
+    if (status == CSFH_WARN_ESDU_CLAMPED) {
+        snprintf(msg, msg_size,
+                 "indentation beyond the validity of the ESDU law (4 (R2 - R1)); the force is "
+                 "held at contact.esdu_F_max = %g N",
+                 f->m.d.esdu_F_max);
+        return FMU_MODEL_WARNING;
+    }
+    return FMU_MODEL_OK;
+}
+
+static int cs_method(const void *f)
+{
+    switch (((const csfh_fmu_t *)f)->cs_method) {
+    case CSFH_SOLVERMETHOD_BDF:
+        return FMU_CS_BDF;
+    case CSFH_SOLVERMETHOD_ADAMS:
+        return FMU_CS_ADAMS;
+    case CSFH_SOLVERMETHOD_RK45:
+        return FMU_CS_RK45;
+    default:
+        return FMU_CS_AUTO;
+    }
+}
+
+static void add_integrator_steps(void *fv, long steps)
+{
+    csfh_fmu_t *f = (csfh_fmu_t *)fv;
+    const long room = 0x7fffffffL - f->integrator_steps; /* the counter saturates at INT_MAX */
+    f->integrator_steps += (int)(steps < room ? steps : room);
+}
+
+/* Restored FMU state: the fields that are not stored table variables (checked by the glue:
+ * time, states, inputs, parameters, contact.active/onset_speed/onset_time/release_*, the
+ * method and the Integer twins) and not recomputed (m.d, der, out): the counts, and the running
+ * peaks. */
+static int check_state(const void *fv, char *msg, size_t msg_size)
+{
+    const csfh_fmu_t *f = (const csfh_fmu_t *)fv;
+    const csfh_model_t *m = &f->m;
+    const struct {
+        const char *name;
+        int value;
+    } counts[] = {{"contact.count", m->z.contact_count},
+                  {"diagnostics.rhs_evaluations", m->counters.rhs},
+                  {"diagnostics.flexure_evaluations", m->counters.flexure},
+                  {"diagnostics.contact_evaluations", m->counters.contact},
+                  {"diagnostics.friction_evaluations", m->counters.friction},
+                  {"diagnostics.integrator_steps", f->integrator_steps}};
+    for (size_t i = 0; i < sizeof(counts) / sizeof(counts[0]); i++) {
+        if (counts[i].value < 0) {
+            snprintf(msg, msg_size, "%s = %d is negative", counts[i].name, counts[i].value);
+            return -1;
+        }
+    }
+    if (f->peaks.active != 0 && f->peaks.active != 1) {
+        snprintf(msg, msg_size, "peaks.active = %d is not 0 or 1", f->peaks.active);
+        return -1;
+    }
+    static const char *const peak_names[CSFH_N_PEAKS] = {"contact.F_N_peak", "contact.F_T_peak",
+                                                         "contact.indentation_peak",
+                                                         "flexure.stress_max_peak"};
+    for (int j = 0; j < CSFH_N_PEAKS; j++) {
+        if (!(isfinite(f->peaks.v[j]) && f->peaks.v[j] >= 0.0)) {
+            snprintf(msg, msg_size, "%s (running peak) = %g is not finite and >= 0", peak_names[j],
+                     f->peaks.v[j]);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+const fmu_model_t fmu_model = {
+    .guid = CSFH_GUID,
+    .model_identifier = CSFH_MODEL_IDENTIFIER,
+    .n_states = CSFH_NUMBER_OF_STATES,
+    .n_event_indicators = CSFH_NUMBER_OF_EVENT_INDICATORS,
+    .n_variables = CSFH_NUMBER_OF_VARIABLES,
+    .variables = csfh_variables,
+    .default_tolerance = CSFH_DEFAULT_TOLERANCE,
+    .size = sizeof(csfh_fmu_t),
+    .time_offset = offsetof(csfh_fmu_t, m.time),
+    .x_offset = offsetof(csfh_fmu_t, m.x),
+    .der_offset = offsetof(csfh_fmu_t, der),
+    .set_defaults = set_defaults,
+    .prepare = prepare,
+    .check_start = check_start,
+    .init_discrete = init_discrete,
+    .derivatives = derivatives,
+    .next_time_event = next_time_event,
+    .event_indicators = event_indicators,
+    .event_update = event_update,
+    .outputs = outputs,
+    .add_integrator_steps = add_integrator_steps,
+    .cs_method = cs_method,
+    .step_memory = sizeof(csfh_step_peaks_t),
+    .comm_step_begins = csfh_peaks_begin,
+    .analyse_step = csfh_peaks_analyse_step,
+    .check_state = check_state,
+};
