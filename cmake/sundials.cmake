@@ -15,7 +15,10 @@
 #
 # Provides:
 #   CSFH_SUNDIALS_SOURCE_DIR           the unpacked tree
-#   CSFH_SUNDIALS_CONFIG_DIR           our sundials/sundials_config.h, sundials/sundials_export.h
+#   CSFH_SUNDIALS_CONFIG_DIR           our sundials/sundials_config.h, sundials/sundials_export.h,
+#                                      sundials/csfh_sundials_alloc.h
+#   CSFH_SUNDIALS_ALLOCATOR            our allocator for SUNDIALS (csfh_sundials_alloc.c), a source
+#                                      of the core module
 #   csfh_sundials_sources(OUT MODULES m...)   absolute paths of the modules' .c files
 #   csfh_sundials_headers(OUT MODULES m...)   their headers: (absolute path, path under an
 #                                             include root) pairs, see the function
@@ -27,6 +30,9 @@ set(CSFH_SUNDIALS_VERSION 6.4.1)
 set(CSFH_SUNDIALS_SOURCE_DIR "" CACHE PATH "An unpacked SUNDIALS ${CSFH_SUNDIALS_VERSION} source tree (default: apt-get source sundials into CSFH_SUNDIALS_CACHE)")
 set(CSFH_SUNDIALS_CACHE "${CMAKE_CURRENT_SOURCE_DIR}/.cache/sundials" CACHE PATH "Where the SUNDIALS source package is downloaded and unpacked once")
 set(CSFH_SUNDIALS_CONFIG_DIR "${CMAKE_CURRENT_SOURCE_DIR}/fmu_src/sundials_config")
+# our configuration header routes SUNDIALS' allocations through this file (compiled with our
+# warnings, not SUNDIALS' flags: csfh_add_sundials_library)
+set(CSFH_SUNDIALS_ALLOCATOR "${CSFH_SUNDIALS_CONFIG_DIR}/csfh_sundials_alloc.c")
 
 # --------------------------------------------------------------------------------------------
 # the source tree
@@ -154,7 +160,7 @@ set(_csfh_sundials_arkode_erk_HEADERS
 set(CSFH_SUNDIALS_MODULES core nvecserial sunmatdense sunmatband sunlinsoldense sunnlsnewton
     sunnlsfixedpoint cvode arkode_erk)
 
-# OUT: absolute paths of the .c files of MODULES
+# OUT: absolute paths of the .c files of MODULES (the core module's include our allocator)
 function(csfh_sundials_sources out)
   cmake_parse_arguments(ARG "" "" "MODULES" ${ARGN})
   set(files)
@@ -165,6 +171,9 @@ function(csfh_sundials_sources out)
     foreach(f IN LISTS _csfh_sundials_${m}_SOURCES)
       list(APPEND files "${CSFH_SUNDIALS_SOURCE_DIR}/src/${f}")
     endforeach()
+    if(m STREQUAL "core")
+      list(APPEND files "${CSFH_SUNDIALS_ALLOCATOR}")
+    endif()
   endforeach()
   set(${out} ${files} PARENT_SCOPE)
 endfunction()
@@ -209,7 +218,13 @@ function(csfh_add_sundials_library target)
   cmake_parse_arguments(ARG "" "" "MODULES" ${ARGN})
   csfh_sundials_sources(sources MODULES ${ARG_MODULES})
   csfh_sundials_include_dirs(dirs MODULES ${ARG_MODULES})
-  add_library(${target} STATIC ${sources})
+  list(REMOVE_ITEM sources "${CSFH_SUNDIALS_ALLOCATOR}")
+  add_library(${target}_allocator OBJECT "${CSFH_SUNDIALS_ALLOCATOR}")
+  target_include_directories(${target}_allocator PRIVATE "${CSFH_SUNDIALS_CONFIG_DIR}")
+  target_compile_options(${target}_allocator PRIVATE ${CSFH_WARNINGS})
+  set_target_properties(${target}_allocator PROPERTIES C_VISIBILITY_PRESET hidden
+                        POSITION_INDEPENDENT_CODE ON)
+  add_library(${target} STATIC ${sources} $<TARGET_OBJECTS:${target}_allocator>)
   target_include_directories(${target} PRIVATE ${dirs})
   target_include_directories(${target} SYSTEM PUBLIC
     "${CSFH_SUNDIALS_CONFIG_DIR}" "${CSFH_SUNDIALS_SOURCE_DIR}/include")

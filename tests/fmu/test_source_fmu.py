@@ -53,6 +53,7 @@ CSFH_SOURCES = {
     "csfh_model.c",
     "csfh_vartable.c",
     "csfh_variables.c",
+    "csfh_sundials_alloc.c",  # SUNDIALS allocates through it (sundials/csfh_sundials_alloc.h)
 }
 NOT_IN_THE_FMU = {"csfh_moreau.c", "csfh_moreau_batch.c", "csfh_rk4event.c", "csfh_api.c"}
 

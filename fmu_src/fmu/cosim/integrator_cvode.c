@@ -5,7 +5,14 @@
  * SUNDIALS' objects are made when CVODE first starts (a run that RK45 takes alone never touches
  * SUNDIALS). The memory is re-initialised at a restart, and made anew where it holds a stop time
  * at or behind the restart (SUNDIALS 6.4 clears a stop time only when it is reached, and
- * CVodeReInit keeps it: CVODE would refuse to step). */
+ * CVodeReInit keeps it: CVODE would refuse to step).
+ *
+ * Out of memory: SUNDIALS allocates when it makes its objects, at CVODE's first step (the
+ * linear solver's saved Jacobian) and at every difference-quotient Jacobian (a vector). The
+ * integrator sets aside a reserve when it is created and puts it in place around these calls
+ * (sundials/csfh_sundials_alloc.h): SUNDIALS never sees a failed allocation, and when it needed
+ * the reserve, every SUNDIALS object of the integrator is destroyed and the call fails, out of
+ * memory (the next start makes them anew). */
 #include <stdlib.h>
 
 #include <cvode/cvode.h>
@@ -14,6 +21,8 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+
+#include <sundials/csfh_sundials_alloc.h>
 
 #include "integrator.h"
 
@@ -30,6 +39,7 @@ typedef struct {
     SUNMatrix J;
     SUNLinearSolver LS;
     SUNNonlinearSolver NLS; /* fixed-point iteration (Adams) */
+    csfh_sundials_reserve_t reserve; /* in place around the calls of SUNDIALS that allocate */
 } cvode_integrator_t;
 
 static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
@@ -51,7 +61,8 @@ static void error_handler(int error_code, const char *module, const char *functi
     it->problem.message(it->problem.host, error_code >= 0, module, function, msg);
 }
 
-/* A negative flag of `call`: reported (CVODE's own message is already out, error_handler). */
+/* A negative flag of `call`: reported (CVODE's own message is already out, error_handler). Only
+ * with the reserve in place: SUNDIALS allocates the flag's name and writes it unchecked. */
 static int check(const cvode_integrator_t *it, int flag, const char *call)
 {
     if (flag >= 0) {
@@ -97,38 +108,85 @@ static int objects(cvode_integrator_t *it)
     return 0;
 }
 
+/* Every SUNDIALS object of the integrator. */
+static void sundials_free(cvode_integrator_t *it)
+{
+    if (it->mem != NULL) {
+        CVodeFree(&it->mem);
+    }
+    if (it->LS != NULL) {
+        SUNLinSolFree(it->LS);
+        it->LS = NULL;
+    }
+    if (it->NLS != NULL) {
+        SUNNonlinSolFree(it->NLS);
+        it->NLS = NULL;
+    }
+    if (it->J != NULL) {
+        SUNMatDestroy(it->J);
+        it->J = NULL;
+    }
+    objects_free(it);
+    it->stop_set = 0;
+}
+
 static void cvode_integrator_free(void *self)
 {
     cvode_integrator_t *it = (cvode_integrator_t *)self;
     if (it == NULL) {
         return;
     }
-    if (it->mem != NULL) {
-        CVodeFree(&it->mem);
-    }
-    if (it->LS != NULL) {
-        SUNLinSolFree(it->LS);
-    }
-    if (it->NLS != NULL) {
-        SUNNonlinSolFree(it->NLS);
-    }
-    if (it->J != NULL) {
-        SUNMatDestroy(it->J);
-    }
-    objects_free(it);
+    sundials_free(it);
+    csfh_sundials_reserve_free(&it->reserve);
     free(it);
+}
+
+/* The reserve: what SUNDIALS 6.4.1 asks for when it makes every object of CVODE at once, with
+ * room to spare: CVODE's memory, the context and the solvers, at most 32 vectors (Adams: 13 of
+ * history), each with its table of operations, the dense matrix twice and the root finding's
+ * arrays. The alloc test's run in which every allocation of SUNDIALS fails checks that it
+ * suffices. */
+static size_t reserve_size(const cs_problem_t *p)
+{
+    const size_t n = (size_t)p->n, vector = 1024 + n * sizeof(double);
+    return 8192 + 32 * vector + 2 * n * n * sizeof(double) + 64 * (size_t)p->n_roots;
 }
 
 static void *create(const cs_problem_t *problem, int lmm)
 {
     cvode_integrator_t *it = (cvode_integrator_t *)calloc(1, sizeof(*it));
-    if (it == NULL) {
+    if (it == NULL || csfh_sundials_reserve_make(&it->reserve, reserve_size(problem)) != 0) {
+        free(it);
         problem->error(problem->host, "out of memory");
         return NULL;
     }
     it->problem = *problem;
     it->lmm = lmm;
     return it;
+}
+
+/* Put the reserve in place before calling SUNDIALS. */
+static void enter(cvode_integrator_t *it)
+{
+    csfh_sundials_reserve_enter(&it->reserve);
+}
+
+/* Take it away after: 0, or -1 when SUNDIALS needed it (then its objects are destroyed first,
+ * while the blocks cut from the reserve are still known as such; reported). */
+static int leave(cvode_integrator_t *it)
+{
+    const int used = csfh_sundials_reserve_used(&it->reserve);
+    if (used) {
+        const int short_of = it->reserve.short_of > 0;
+        sundials_free(it);
+        csfh_sundials_reserve_reset(&it->reserve);
+        it->problem.error(it->problem.host,
+                          short_of ? "out of memory in SUNDIALS (and its reserve was short)"
+                                   : "out of memory in SUNDIALS (CVODE is made anew at the "
+                                     "next step)");
+    }
+    csfh_sundials_reserve_leave(&it->reserve);
+    return used ? -1 : 0;
 }
 
 static void *bdf_create(const cs_problem_t *problem)
@@ -177,19 +235,18 @@ static int new_memory(cvode_integrator_t *it, double t)
     }
     if (it->mem == NULL || (adams ? it->NLS == NULL : it->LS == NULL)) {
         it->problem.error(it->problem.host, "cannot allocate CVODE");
+        if (it->mem != NULL) {
+            CVodeFree(&it->mem); /* (never re-initialised half made) */
+        }
         return -1;
     }
     return configure(it, t);
 }
 
-static int cvode_integrator_start(void *self, double t, const double *y, double h_first)
+/* CVODE's memory made anew at (t, y), with the context, vectors and solvers it needs: 0, or -1
+ * (reported). */
+static int make(cvode_integrator_t *it, double t, const double *y)
 {
-    cvode_integrator_t *it = (cvode_integrator_t *)self;
-    (void)h_first; /* CVODE chooses its first step */
-    if (it->mem != NULL && !(it->stop_set && it->stop <= t)) {
-        N_VSetArrayPointer((sunrealtype *)y, it->ny);
-        return check(it, CVodeReInit(it->mem, t, it->ny), "CVodeReInit");
-    }
     it->stop_set = 0;
     if (it->mem != NULL) {
         CVodeFree(&it->mem);
@@ -202,6 +259,24 @@ static int cvode_integrator_start(void *self, double t, const double *y, double 
     return new_memory(it, t);
 }
 
+static int start(cvode_integrator_t *it, double t, const double *y)
+{
+    if (it->mem != NULL && !(it->stop_set && it->stop <= t)) {
+        N_VSetArrayPointer((sunrealtype *)y, it->ny);
+        return check(it, CVodeReInit(it->mem, t, it->ny), "CVodeReInit");
+    }
+    return make(it, t, y);
+}
+
+static int cvode_integrator_start(void *self, double t, const double *y, double h_first)
+{
+    cvode_integrator_t *it = (cvode_integrator_t *)self;
+    (void)h_first; /* CVODE chooses its first step */
+    enter(it);
+    const int s = start(it, t, y);
+    return leave(it) == 0 ? s : -1;
+}
+
 static int cvode_integrator_step(void *self, double *t, double *y)
 {
     cvode_integrator_t *it = (cvode_integrator_t *)self;
@@ -209,9 +284,12 @@ static int cvode_integrator_step(void *self, double *t, double *y)
     /* tout only sets the size of the first step after a (re)start (CVODE's estimate is bounded
      * by a tenth of the distance to tout): a fixed horizon, so that the step sequence does not
      * depend on the communication grid */
+    enter(it);
     const int flag = CVode(it->mem, *t + it->problem.first_step_max, it->ny, t, CV_ONE_STEP);
     if (flag < 0) {
         check(it, flag, "CVode");
+    }
+    if (leave(it) != 0 || flag < 0) {
         return CS_STEP_FAILED;
     }
     if (flag == CV_TSTOP_RETURN) {
@@ -226,12 +304,18 @@ static int cvode_integrator_set_stop_time(void *self, double t_stop)
     cvode_integrator_t *it = (cvode_integrator_t *)self;
     it->stop_set = 1;
     it->stop = t_stop;
-    return check(it, CVodeSetStopTime(it->mem, t_stop), "CVodeSetStopTime");
+    enter(it);
+    const int s = check(it, CVodeSetStopTime(it->mem, t_stop), "CVodeSetStopTime");
+    return leave(it) == 0 ? s : -1;
 }
 
+/* (The memory is NULL after SUNDIALS ran out of memory, until the next start: nothing to read.) */
 static int cvode_integrator_dense(void *self, double t, int k, double *out)
 {
     cvode_integrator_t *it = (cvode_integrator_t *)self;
+    if (it->mem == NULL) {
+        return -1;
+    }
     N_VSetArrayPointer(out, it->nwork);
     return CVodeGetDky(it->mem, t, k, it->nwork);
 }
@@ -239,14 +323,20 @@ static int cvode_integrator_dense(void *self, double t, int k, double *out)
 static double cvode_integrator_time(const void *self)
 {
     double tn = 0.0;
-    CVodeGetCurrentTime(((const cvode_integrator_t *)self)->mem, &tn);
+    void *mem = ((const cvode_integrator_t *)self)->mem;
+    if (mem != NULL) {
+        CVodeGetCurrentTime(mem, &tn);
+    }
     return tn;
 }
 
 static double cvode_integrator_last_step(const void *self)
 {
     double hu = 0.0;
-    CVodeGetLastStep(((const cvode_integrator_t *)self)->mem, &hu);
+    void *mem = ((const cvode_integrator_t *)self)->mem;
+    if (mem != NULL) {
+        CVodeGetLastStep(mem, &hu);
+    }
     return hu;
 }
 
@@ -255,9 +345,11 @@ static void cvode_integrator_counts(const void *self, cs_counts_t *counts)
     void *mem = ((const cvode_integrator_t *)self)->mem;
     long nconv = 0, nerr = 0;
     counts->steps = 0;
-    CVodeGetNumSteps(mem, &counts->steps);
-    CVodeGetNumNonlinSolvConvFails(mem, &nconv);
-    CVodeGetNumErrTestFails(mem, &nerr);
+    if (mem != NULL) {
+        CVodeGetNumSteps(mem, &counts->steps);
+        CVodeGetNumNonlinSolvConvFails(mem, &nconv);
+        CVodeGetNumErrTestFails(mem, &nerr);
+    }
     counts->fails = nconv + nerr;
     counts->stiff = 0;
 }

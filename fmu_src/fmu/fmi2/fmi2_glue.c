@@ -100,6 +100,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                                             fmuType == fmi2ModelExchange ? FMU_ME : FMU_CS, 2,
                                             loggingOn);
     if (inst == NULL) {
+        if (logger) {
+            logger(env, instanceName, fmi2Error, "logStatusError",
+                   "fmi2Instantiate: out of memory");
+        }
         return NULL;
     }
     inst->stepper = &cs_stepper;

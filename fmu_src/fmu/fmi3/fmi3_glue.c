@@ -78,6 +78,11 @@ static fmu_instance_t *instantiate(const char *function, fmi3String instanceName
     }
     fmu_instance_t *inst = fmu_instance_new(instanceName, kind, 3, loggingOn);
     if (inst == NULL) {
+        if (logger) {
+            char msg[MSG_SIZE];
+            snprintf(msg, sizeof(msg), "%s: out of memory", function);
+            logger(env, fmi3Error, "logStatusError", msg);
+        }
         return NULL;
     }
     inst->stepper = &cs_stepper;

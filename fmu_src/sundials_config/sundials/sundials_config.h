@@ -7,7 +7,9 @@
  *   - serial only: no MPI, no threads, no GPU, no third-party libraries;
  *   - no logging, no profiling, no monitoring, no fused kernels;
  *   - compiled into the FMU binary (static): no symbol of SUNDIALS is exported (see
- *     sundials_export.h for its API, ../hidden/ for the internal functions of CVODE).
+ *     sundials_export.h for its API, ../hidden/ for the internal functions of CVODE);
+ *   - allocations through csfh's allocator, which never lets SUNDIALS see a failed one
+ *     (csfh_sundials_alloc.h).
  *
  * Only the macros the compiled modules (cmake/sundials.cmake) read are defined. */
 #ifndef CSFH_SUNDIALS_CONFIG_H
@@ -67,5 +69,8 @@
 #define SUNDIALS_INLINE SUNDIALS_C_INLINE
 #endif
 #define SUNDIALS_STATIC_INLINE static SUNDIALS_INLINE
+
+/* last: the allocator's names replace the C library's in what follows */
+#include "sundials/csfh_sundials_alloc.h"
 
 #endif
