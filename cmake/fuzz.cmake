@@ -2,12 +2,16 @@
 # glue + model + core, with AddressSanitizer + UndefinedBehaviorSanitizer (+ LeakSanitizer, part
 # of ASan on Linux), each linked into its own executable with our random FMI call-sequence
 # driver (tests/fuzz/fuzz_fmi.c), and with the FMU-state regression test (tests/fuzz/fmu_states.c).
-# Registered with ctest (label "fuzz"). Included from CMakeLists.txt when CSFH_FUZZ is ON; needs
-# the FMU's prerequisites (CSFH_BUILD_FMU: FMI headers, SUNDIALS).
+# Registered with ctest (label "fuzz"). The failed-allocation test (tests/fuzz/alloc_fail.c,
+# label "alloc") is built the same way, for both FMUs and both FMI versions. Included from
+# CMakeLists.txt when CSFH_FUZZ is ON; needs the FMU's prerequisites (CSFH_BUILD_FMU: FMI
+# headers, SUNDIALS).
 #
 #   cmake -S . -B build-fuzz -G Ninja -DCSFH_FUZZ=ON && cmake --build build-fuzz --target csfh_fuzz
 #   ctest --test-dir build-fuzz -L fuzz --output-on-failure
+#   ctest --test-dir build-fuzz -L alloc --output-on-failure
 #   build-fuzz/fuzz_fmi_csfh --seeds 1 100 --sequences 50     # more seeds by hand
+#   CSFH_ALLOC_FAIL=120 build-fuzz/alloc_fail_csfh_fmi2        # one failed allocation
 #
 # CVODE is linked through the one variable CSFH_FUZZ_CVODE (a target or library list), so that a
 # different SUNDIALS build is one line away. It is not instrumented: the sanitizers watch our
@@ -59,9 +63,31 @@ foreach(_fmu csfh combdrive)
   target_link_libraries(${_target} PRIVATE ${CSFH_FUZZ_CVODE} m)
 endforeach()
 
+# the failed-allocation test (tests/fuzz/alloc_fail.c): every allocation of the FMU's code and of
+# the SUNDIALS modules linked in goes through the driver's wrappers, which fail one in turn
+set(_alloc_targets)
+foreach(_fmu csfh combdrive)
+  foreach(_fmi 2 3)
+    set(_target alloc_fail_${_fmu}_fmi${_fmi})
+    set(_sources ${_fuzz_sources_${_fmu}})
+    if(_fmi EQUAL 3)
+      list(REMOVE_ITEM _sources ${CSFH_FMI2_FRONT_END})
+      list(APPEND _sources ${CSFH_FMI3_FRONT_END})
+    endif()
+    add_executable(${_target} tests/fuzz/alloc_fail.c tests/fuzz/alloc_fmi${_fmi}.c ${_sources})
+    add_dependencies(${_target} csfh_generate)
+    target_include_directories(${_target} PRIVATE ${FMI_HEADERS_DIR} ${_fuzz_include_${_fmu}})
+    target_compile_options(${_target} PRIVATE ${CSFH_WARNINGS} ${CSFH_FUZZ_FLAGS})
+    target_link_options(${_target} PRIVATE ${CSFH_FUZZ_FLAGS}
+                        -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc)
+    target_link_libraries(${_target} PRIVATE ${CSFH_FUZZ_CVODE} m)
+    list(APPEND _alloc_targets ${_target})
+  endforeach()
+endforeach()
+
 add_custom_target(csfh_fuzz)
 add_dependencies(csfh_fuzz fuzz_fmi_csfh fuzz_fmi_combdrive fmu_states_csfh fmu_states_combdrive
-                 fuzz_fmi3_csfh fuzz_fmi3_combdrive)
+                 fuzz_fmi3_csfh fuzz_fmi3_combdrive ${_alloc_targets})
 
 # Fixed seeds, bounded: 2 x 320000 calls, about a minute for both FMUs on one core. Hangs are
 # failures (the driver's alarm per sequence, then ctest's timeout).
@@ -79,3 +105,10 @@ add_test(NAME fmu_states_combdrive COMMAND fmu_states_combdrive)
 set_tests_properties(fuzz_fmi_csfh fuzz_fmi_combdrive fuzz_fmi3_csfh fuzz_fmi3_combdrive
                      fmu_states_csfh fmu_states_combdrive PROPERTIES
                      LABELS fuzz TIMEOUT 300 ENVIRONMENT "${_fuzz_env}")
+# every allocation of a representative run failed in turn (a child process each), then all of
+# SUNDIALS' at once: seconds per FMU and FMI version
+foreach(_target IN LISTS _alloc_targets)
+  add_test(NAME ${_target} COMMAND ${_target})
+endforeach()
+set_tests_properties(${_alloc_targets} PROPERTIES
+                     LABELS alloc TIMEOUT 300 ENVIRONMENT "${_fuzz_env}")

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Run every test: the C unit tests under AddressSanitizer + UndefinedBehaviorSanitizer (ctest), the
-# FMI fuzz tests (ASan + UBSan + LeakSanitizer), then the Python tests (pytest, against the
-# package installed in the virtual environment, with its FMU; they run examples/ too), the
-# documentation build (Sphinx, warnings as errors) and the linters. Sets up first
-# (tools/setup.sh, with the extras the tests use; it reinstalls only what changed), in
+# FMI fuzz tests and the failed-allocation test (ASan + UBSan + LeakSanitizer), then the Python
+# tests (pytest, against the package installed in the virtual environment, with its FMU; they
+# run examples/ too), the documentation build (Sphinx, warnings as errors) and the linters. Sets
+# up first (tools/setup.sh, with the extras the tests use; it reinstalls only what changed), in
 # $CSFH_VENV, else .venv.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -23,11 +23,12 @@ cmake -S . -B build-asan -G Ninja -DCSFH_SANITIZE=ON -DCSFH_BUILD_FMU=OFF -DCMAK
 cmake --build build-asan
 ctest --test-dir build-asan --output-on-failure
 
-stage "FMI fuzz tests of both FMUs (ASan + UBSan + LeakSanitizer, fixed seeds)"
+stage "FMI fuzz and failed-allocation tests of both FMUs (ASan + UBSan + LeakSanitizer)"
 cmake -S . -B build-fuzz -G Ninja -DCSFH_FUZZ=ON -DCSFH_BUILD_TESTS=OFF -DCSFH_BUILD_BENCHMARKS=OFF \
   -DCSFH_PLATFORMS=host >/dev/null
 cmake --build build-fuzz --target csfh_fuzz
 ctest --test-dir build-fuzz -L fuzz --output-on-failure
+ctest --test-dir build-fuzz -L alloc --output-on-failure
 
 stage "FMU build tree (every platform: cmake/platforms.cmake)"
 cmake -S . -B build -G Ninja -DCSFH_PLATFORMS=all >/dev/null
