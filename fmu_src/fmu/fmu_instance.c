@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "csfh_format.h"
 #include "fmu_instance.h"
 
 /* the co-simulation stepper's hooks (fmu_stepper_t), where the front-end gave them */
@@ -239,8 +240,13 @@ fmu_status_t fmu_setup_experiment(fmu_instance_t *inst, const char *function, in
                                   double tolerance, double start_time, int stop_time_defined,
                                   double stop_time)
 {
-    if (tolerance_defined && !(isfinite(tolerance) && tolerance > 0.0 && tolerance < 1.0)) {
-        FMU_LOG_ERROR(inst, "%s: tolerance = %g must be in (0, 1)", function, tolerance);
+    if (tolerance_defined && !(tolerance >= FMU_TOLERANCE_MIN && tolerance < FMU_TOLERANCE_MAX)) {
+        char value[32], lo[32];
+        FMU_LOG_ERROR(inst,
+                      "%s: tolerance = %s must be in [%s, %g): the integrators cannot honour a "
+                      "relative tolerance below 10 machine epsilons, nor one of 1 or more",
+                      function, csfh_format_value(value, tolerance),
+                      csfh_format_value(lo, FMU_TOLERANCE_MIN), FMU_TOLERANCE_MAX);
         return FMU_ERROR;
     }
     if (!isfinite(start_time)) {

@@ -13,6 +13,7 @@
 #ifndef CSFH_FMU_INSTANCE_H
 #define CSFH_FMU_INSTANCE_H
 
+#include <float.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
@@ -195,6 +196,13 @@ double fmu_next_time_event(fmu_instance_t *inst);
 
 /* ------------------------------------------------------------------------------------------ */
 /* experiment, initialization */
+
+/* The relative tolerances the co-simulation integrators (RK45, CVODE) can honour: from ten
+ * units of round-off, below which their error estimates are round-off themselves (and the
+ * absolute tolerances, relative x nominal, underflow), up to but not including 1, where an error
+ * as large as the solution passes. fmu_setup_experiment refuses any other. */
+#define FMU_TOLERANCE_MIN (10.0 * DBL_EPSILON)
+#define FMU_TOLERANCE_MAX 1.0
 
 /* The checks and settings of fmi2SetupExperiment / fmi3EnterInitializationMode. */
 fmu_status_t fmu_setup_experiment(fmu_instance_t *inst, const char *function, int tolerance_defined,

@@ -39,6 +39,7 @@
 #include <unistd.h>
 
 #include "fmi2Functions.h"
+#include "fmu_instance.h" /* (the tolerances the FMU accepts) */
 #include "fmu_model.h"
 
 #define SEQUENCE_ALARM_S 60 /* a sequence that takes longer is a hang */
@@ -738,7 +739,7 @@ static void do_setup(instance_t *in)
         start = hostile_double();
         tol = 1e-6;
     }
-    const int tol_ok = isfinite(tol) && tol > 0.0 && tol < 1.0;
+    const int tol_ok = tol >= FMU_TOLERANCE_MIN && tol < FMU_TOLERANCE_MAX;
     expect_t e = legal(in, BIT(M_INSTANTIATED));
     if (e != MUST_REJECT && (!tol_ok || !isfinite(start))) {
         e = MUST_REJECT;
