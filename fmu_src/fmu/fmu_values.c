@@ -129,7 +129,12 @@ static int settable(fmu_instance_t *inst, const csfh_variable_t *v, const char *
     return ok;
 }
 
-/* The i-th value of a set call as a double. */
+/* fmi3Boolean is C's bool, one byte on every platform the FMU is built for. */
+_Static_assert(sizeof(bool) == 1, "an fmi3Boolean array is read as bytes");
+
+/* The i-th value of a set call as a double. An fmi3Boolean comes from the importer's memory,
+ * where any byte may stand: it is read as a byte, nonzero for true (a bool holding 2 is not a
+ * valid bool, and reading it as one is undefined). */
 static double set_value_at(const csfh_variable_t *v, fmu_value_kind_t kind, const void *value,
                            size_t i)
 {
@@ -145,7 +150,7 @@ static double set_value_at(const csfh_variable_t *v, fmu_value_kind_t kind, cons
         return (double)((const int64_t *)value)[i]; /* exact for |n| < 2^53; the range check
                                                       refuses anything outside an int's */
     default:
-        return ((const bool *)value)[i] ? 1.0 : 0.0;
+        return ((const unsigned char *)value)[i] != 0 ? 1.0 : 0.0;
     }
 }
 

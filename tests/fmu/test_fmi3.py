@@ -10,6 +10,7 @@ import shutil
 import struct
 import subprocess
 import zipfile
+from ctypes import POINTER, c_uint8, cast
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +20,7 @@ import pytest
 from fmi2_calls import STATES
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi3 import FMU3Model, FMU3Slave, fmi3Float64
+from fmpy.fmi3 import FMU3Model, FMU3Slave, fmi3Boolean, fmi3Float64, fmi3ValueReference
 from fmpy.model_description import ModelDescription
 from fmpy.validation import validate_fmu, validate_model_description
 from fmu_binaries import fmi3_functions, need, tool
@@ -431,3 +432,51 @@ def test_model_exchange_event_indicator_is_the_gap(md3: ModelDescription, unzipp
     finally:
         fmu.terminate()
         fmu.freeInstance()
+
+
+# ------------------------------------------------------------------------------------------
+# foreign booleans: an importer's fmi3Boolean array is bytes, any nonzero one is true
+
+BOOLEANS = (
+    "friction.enabled",
+    "flexure.enabled",
+    "flexure.track_stress_peak",
+    "initial.from_parameters",
+)
+
+
+def run_with_booleans(md: ModelDescription, directory: str, raw: list[int] | None) -> list[Any]:
+    """Set the BOOLEANS (from the raw bytes, or as Python's True/False: fmpy's 0 and 1), then run
+    0.1 s; what the instance reads back and its state at the end."""
+    log = Log()
+    fmu = slave(md, directory, log, eventModeUsed=False, earlyReturnAllowed=False)
+    try:
+        fmu.enterInitializationMode(startTime=0.0)
+        refs = [vr(md, name) for name in BOOLEANS]
+        if raw is None:
+            fmu.setBoolean(refs, [True, True, True, False])
+        else:
+            data = (c_uint8 * len(raw))(*raw)
+            fmu.fmi3SetBoolean(
+                fmu.component,
+                (fmi3ValueReference * len(refs))(*refs),
+                len(refs),
+                cast(data, POINTER(fmi3Boolean)),
+                len(raw),
+            )
+        read = list(fmu.getBoolean(refs))
+        fmu.exitInitializationMode()
+        fmu.doStep(0.0, 0.1)
+        assert not log.errors(), log.errors()
+        return [*read, *fmu.getFloat64([vr(md, name) for name in STATES])]
+    finally:
+        fmu.freeInstance()
+
+
+@pytest.mark.parametrize("true", [2, 0x7F, 0x80, 0xFF])
+def test_foreign_boolean_bytes_are_true(md3: ModelDescription, unzipped3: str, true: int) -> None:
+    """fmi3SetBoolean reads each value as its byte (never as C's bool, which may only hold 0 or
+    1): a byte `true` is true, 0 is false, and the run is bit for bit the run with 1 and 0."""
+    foreign = run_with_booleans(md3, unzipped3, [true, true, 1, 0])
+    assert foreign[:4] == [True, True, True, False]
+    assert foreign == run_with_booleans(md3, unzipped3, None)

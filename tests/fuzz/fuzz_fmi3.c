@@ -3,9 +3,10 @@
  * LeakSanitizer). The FMI 2.0 driver (fuzz_fmi.c) covers the shared instance in depth; this one
  * covers what the FMI 3.0 front-end adds and how it reaches the shared code: its state machine
  * (Event Mode in co-simulation, Step Mode, early return), the typed get/set functions (Float64,
- * Int32, Int64 enumerations, Boolean, the types without variables), the ME functions, and FMU
- * states: taken, restored, serialized, and deserialized after corruption (flipped bytes,
- * hostile words, truncated, extended, random, the header broken).
+ * Int32, Int64 enumerations, Boolean, also as foreign bytes: 2, 0x80, ...; the types without
+ * variables), the ME functions, and FMU states: taken, restored, serialized, and deserialized
+ * after corruption (flipped bytes, hostile words, truncated, extended, random, the header
+ * broken).
  *
  * Each sequence instantiates a model-exchange instance and a co-simulation instance (random
  * eventModeUsed / earlyReturnAllowed) and makes --calls calls on them, mostly legal, with valid
@@ -252,6 +253,27 @@ static void check_finite(const double *x, size_t n, const char *what, fmi3Status
 /* ------------------------------------------------------------------------------------------ */
 /* calls */
 
+/* fmi3SetBoolean of `value`, often as a foreign byte (an importer's true need not be 1: any
+ * nonzero byte, which the FMU must read as a byte, never as C's bool); an accepted value must
+ * read back as C's false or true. */
+static fmi3Status set_boolean(instance_t *in, fmi3ValueReference vr, int value)
+{
+    static const unsigned char foreign[] = {2, 3, 0x7F, 0x80, 0xFF};
+    unsigned char byte = (unsigned char)(value != 0);
+    if (byte && chance(0.5)) {
+        byte = foreign[below((int)sizeof(foreign))];
+    }
+    const fmi3Status s = fmi3SetBoolean(in->c, &vr, 1, (const fmi3Boolean *)(const void *)&byte, 1);
+    unsigned char back = 0;
+    if (s == fmi3OK &&
+        fmi3GetBoolean(in->c, &vr, 1, (fmi3Boolean *)(void *)&back, 1) == fmi3OK &&
+        back != (byte != 0)) {
+        fail("fmi3SetBoolean of the byte %u read back as the byte %u", byte, back);
+    }
+    note("fmi3SetBoolean(vr %u, byte %u) -> %d", vr, byte, (int)s);
+    return s;
+}
+
 static void do_set(instance_t *in)
 {
     const csfh_variable_t *v = random_variable();
@@ -275,11 +297,9 @@ static void do_set(instance_t *in)
                         : fmi3SetInt64(in->c, &vr, 1, &n, 1);
         break;
     }
-    default: {
-        const fmi3Boolean b = valid ? x != 0.0 : chance(0.5);
-        s = fmi3SetBoolean(in->c, &vr, 1, &b, 1);
+    default:
+        s = set_boolean(in, vr, valid ? x != 0.0 : chance(0.5));
         break;
-    }
     }
     note("set %s = %g (vr %u) -> %d", v->name, x, vr, (int)s);
     judge(in, &p, "set", s, 1);
