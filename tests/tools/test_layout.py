@@ -1,5 +1,5 @@
 """The package's layout: no import cycles, and every import goes down the layers (cli -> studies
--> batch / cosim -> runners -> model -> foundation), as the package docstring describes.
+-> batch / cosim -> runners -> model -> foundation), as the package docstring describes; and no two test modules share a name.
 
 The import graph is read from the source (ast), counting every import: at module level, inside
 functions (lazy imports) and under `if TYPE_CHECKING:`."""
@@ -325,3 +325,13 @@ def test_a_c_source_using_a_higher_layer_is_found() -> None:
     ]
     with pytest.raises(KeyError, match="no part"):
         c_part("elsewhere/a.c")
+
+
+def test_test_modules_have_unique_names() -> None:
+    # pytest imports test modules by basename (no __init__.py under tests/), so two files of one
+    # name in different folders stop the whole collection.
+    tests = Path(__file__).resolve().parents[1]
+    seen: dict[str, Path] = {}
+    for path in sorted(tests.rglob("test_*.py")):
+        assert path.name not in seen, f"{path} and {seen[path.name]} share a name"
+        seen[path.name] = path
