@@ -12,7 +12,8 @@
 #
 # Each platform (each darwin slice) is a cross build of this same project in
 # build/platforms/<slice> (CSFH_CROSS_BUILD: SUNDIALS, the FMU binaries, the test importers),
-# with the same SUNDIALS source, the same FMI headers and the same flags, run by ExternalProject.
+# with the same SUNDIALS source, the same FMI headers and the same flags, run by ExternalProject;
+# each also makes the harness's ctypes libraries (cmake/ctypes.cmake) in <cross build>/lib/.
 # Provides csfh_platform_binaries(OUT MODEL_IDENTIFIER id): "platform=file[,file]" entries for
 # tools/fmu_package.py and the targets that build them (CSFH_PLATFORM_TARGETS).
 
@@ -111,6 +112,11 @@ if(_platforms STREQUAL "all")
       _csfh_fmu3_tuple(tuple ${slice})
       list(APPEND byproducts ${CMAKE_BINARY_DIR}/platforms/${slice}/binaries3/${id}/${tuple}/${id}${suffix})
     endforeach()
+    # the ctypes libraries (cmake/ctypes.cmake) in <cross build>/lib/
+    csfh_ctypes_file_names(libraries ${platform})
+    foreach(library IN LISTS libraries)
+      list(APPEND byproducts ${CMAKE_BINARY_DIR}/platforms/${slice}/lib/${library})
+    endforeach()
     ExternalProject_Add(csfh_platform_${slice}
       SOURCE_DIR ${PROJECT_SOURCE_DIR}
       BINARY_DIR ${CMAKE_BINARY_DIR}/platforms/${slice}
@@ -130,6 +136,26 @@ if(_platforms STREQUAL "all")
       USES_TERMINAL_BUILD ON)
     list(APPEND CSFH_PLATFORM_TARGETS csfh_platform_${slice})
   endforeach()
+
+  # darwin64's ctypes libraries as universal (x86_64 + arm64) files, as the FMU binary:
+  # build/platforms/darwin64/lib/ (the macOS wheel's, tools/build_wheels.sh)
+  csfh_ctypes_file_names(libraries darwin64)
+  set(fat_libraries)
+  foreach(library IN LISTS libraries)
+    set(fat ${CMAKE_BINARY_DIR}/platforms/darwin64/lib/${library})
+    set(thin ${CMAKE_BINARY_DIR}/platforms/darwin64-x86_64/lib/${library}
+             ${CMAKE_BINARY_DIR}/platforms/darwin64-arm64/lib/${library})
+    add_custom_command(
+      OUTPUT ${fat}
+      COMMAND ${CMAKE_COMMAND} -E make_directory ${CMAKE_BINARY_DIR}/platforms/darwin64/lib
+      COMMAND Python3::Interpreter ${PROJECT_SOURCE_DIR}/tools/macho_fat.py ${fat} ${thin}
+      DEPENDS csfh_platform_darwin64-x86_64 csfh_platform_darwin64-arm64 ${thin}
+              ${PROJECT_SOURCE_DIR}/tools/macho_fat.py
+      COMMENT "Joining the darwin64 slices of ${library}"
+      VERBATIM)
+    list(APPEND fat_libraries ${fat})
+  endforeach()
+  add_custom_target(csfh_darwin64_libraries ALL DEPENDS ${fat_libraries})
 endif()
 
 # "platform=file[,file...]" for tools/fmu_package.py: the binaries of model `id` (host_file: the
