@@ -139,7 +139,8 @@ def test_linux_wheel_runs_compare_without_build_tools(tmp_path: Path) -> None:
     pip = [str(venv / "bin" / "python"), "-m", "pip", "install", "-q"]
     subprocess.run([*pip, str(path)], check=True, env=env, timeout=900, cwd=tmp_path)
     info = output(str(venv / "bin" / "csfh"), "info", env=env)
-    assert str(venv) in info and "build" not in info.replace(str(venv), ""), info
+    used = re.findall(r"(/\S+) \((\w+)\)", info)  # every artefact: its path and its origin
+    assert used and all(p.startswith(f"{venv}/") and o == "package" for p, o in used), info
     out = tmp_path / "compare"
     subprocess.run(
         [str(venv / "bin" / "csfh"), "compare", "central", "--out", str(out), "--quiet"],
@@ -221,8 +222,11 @@ def test_windows_libraries_export_only_the_api_and_import_only_system_dlls(
 def test_macos_libraries_are_universal_and_export_only_the_api(
     tmp_path_factory: pytest.TempPathFactory,
 ) -> None:
-    package = unpacked("macosx_*_universal2", tmp_path_factory)
-    for name in LIBRARIES["macosx_*_universal2"]:
+    """Two slices, x86_64 and arm64, each exporting only the API, needing only libSystem, and
+    built for the minimum macOS of the wheel's tag."""
+    tag = "macosx_*_universal2"
+    package = unpacked(tag, tmp_path_factory)
+    for name in LIBRARIES[tag]:
         path = str(package / name)
         assert output(tool("llvm-lipo"), "-archs", path).split() == ["x86_64", "arm64"]
         for arch in ("x86_64", "arm64"):
@@ -230,6 +234,11 @@ def test_macos_libraries_are_universal_and_export_only_the_api(
             symbols = {line.split()[-1] for line in text.splitlines() if line.strip()}
             ours = symbols - {"__mh_dylib_header", "___dso_handle"}
             assert ours and all(EXPORTS[name[3:-6]].match(s[1:]) for s in ours), sorted(symbols)
+            headers = output(
+                tool("llvm-objdump"), "--macho", "--private-headers", f"--arch={arch}", path
+            )
+            minimum = re.search(r"LC_BUILD_VERSION.*?\n\s*minos (\d+)\.(\d+)", headers, re.S)
+            assert minimum and f"macosx_{minimum[1]}_{minimum[2]}_" in wheel(tag).name, headers
             used = output(tool("llvm-objdump"), "--macho", "--dylibs-used", f"--arch={arch}", path)
             dylibs = [line.split()[0] for line in used.splitlines()[1:] if line.strip()]
             assert dylibs[1:] == ["/usr/lib/libSystem.B.dylib"], used
