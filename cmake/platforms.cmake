@@ -4,7 +4,9 @@
 #                                    Ubuntu 20.04 and later)
 #                           win64    x86_64-windows-gnu (Universal CRT, i.e. Windows 10 and later,
 #                                    or the redistributable on older Windows)
-#                           darwin64 x86_64-macos and aarch64-macos, one universal (fat) binary
+#                           darwin64 x86_64-macos and aarch64-macos, one universal (fat) binary,
+#                                    for macOS 11 and later (the first with arm64; zig 0.17.1's
+#                                    default is macOS 15)
 #                  = host   the host compiler's linux64 binary only (no zig needed)
 #                  = auto   all where zig is found, else host (the default)
 #   CSFH_ZIG                the zig executable (default: the ziglang Python package of the Python
@@ -57,8 +59,8 @@ set(CSFH_PLATFORMS_BUILT ${_platforms})
 set(_csfh_slices
   "linux64|linux64|x86_64-linux-gnu.2.17|Linux|x86_64"
   "win64|win64|x86_64-windows-gnu|Windows|AMD64"
-  "darwin64-x86_64|darwin64|x86_64-macos|Darwin|x86_64"
-  "darwin64-arm64|darwin64|aarch64-macos|Darwin|arm64")
+  "darwin64-x86_64|darwin64|x86_64-macos.11.0|Darwin|x86_64"
+  "darwin64-arm64|darwin64|aarch64-macos.11.0|Darwin|arm64")
 set(CSFH_PLATFORM_TARGETS)
 
 # the FMI 3.0 platform tuple of a slice
@@ -117,11 +119,22 @@ if(_platforms STREQUAL "all")
     foreach(library IN LISTS libraries)
       list(APPEND byproducts ${CMAKE_BINARY_DIR}/platforms/${slice}/lib/${library})
     endforeach()
+    # a cross build not configured for this target triple (CSFH_CROSS_TRIPLE, in its cache) is
+    # configured afresh: on a compiler change CMake drops the cache's variables, the -D
+    # arguments included
+    set(cache ${CMAKE_BINARY_DIR}/platforms/${slice}/CMakeCache.txt)
+    if(EXISTS ${cache})
+      file(STRINGS ${cache} configured REGEX "^CSFH_CROSS_TRIPLE:")
+      if(NOT configured MATCHES "=${triple}$")
+        file(REMOVE ${cache})
+      endif()
+    endif()
     ExternalProject_Add(csfh_platform_${slice}
       SOURCE_DIR ${PROJECT_SOURCE_DIR}
       BINARY_DIR ${CMAKE_BINARY_DIR}/platforms/${slice}
       CMAKE_ARGS
-        -DCSFH_CROSS_BUILD=ON -DCSFH_BUILD_TESTS=OFF -DCSFH_BUILD_BENCHMARKS=OFF
+        -DCSFH_CROSS_BUILD=ON -DCSFH_CROSS_TRIPLE=${triple} -DCSFH_BUILD_TESTS=OFF
+        -DCSFH_BUILD_BENCHMARKS=OFF
         -DCMAKE_BUILD_TYPE=Release
         -DCMAKE_SYSTEM_NAME=${system} -DCMAKE_SYSTEM_PROCESSOR=${processor}
         -DCMAKE_C_COMPILER=${_wrappers}/${triple}-cc

@@ -3,13 +3,13 @@
 # libraries, so a wheel serves every Python >= 3.11):
 #   csfh-V-py3-none-manylinux_2_17_x86_64.whl   Linux x86_64 with glibc >= 2.17
 #   csfh-V-py3-none-win_amd64.whl               Windows 10 and later, x86_64
-#   csfh-V-py3-none-macosx_M_universal2.whl     macOS M and later, x86_64 and arm64
+#   csfh-V-py3-none-macosx_11_0_universal2.whl  macOS 11 and later, x86_64 and arm64
 # Each holds the portable FMUs (every platform's binaries and the sources) and its platform's
 # ctypes libraries, cross-built with zig as the FMU binaries are (cmake/platforms.cmake,
 # cmake/ctypes.cmake). The build is build/, the same tree tools/setup.sh and tools/test.sh use:
 # what is built there already is not built again.
 #
-# Usage: tools/build_wheels.sh DIR
+# Usage: tools/build_wheels.sh DIR   (replaces the csfh wheels DIR has)
 # Needs: tools/setup.sh --platforms all run before (CMake, Ninja, zig, the virtual environment);
 # auditwheel (pip install auditwheel), if installed, confirms the Linux wheel's tag.
 # Environment: CSFH_VENV, the virtual environment (default: .venv).
@@ -31,6 +31,7 @@ start=$SECONDS
 "$cmake" --build build --target csfh_wheel_files csfh_ctypes_driver
 echo "build_wheels: build/ up to date in $((SECONDS - start))s"
 
+rm -f "$out"/csfh-*-py3-none-*.whl  # (the wheels of an earlier build: one per platform in DIR)
 for platform in linux64 win64 darwin64; do
   wheel="$("$vpy" tools/wheel.py --build build --platform "$platform" "$out")"
   echo "build_wheels: $wheel ($(du -h "$wheel" | cut -f1))"

@@ -144,11 +144,12 @@ if [ -f "$stamp" ] && [ "$(sed -n 1p "$stamp")" = "$requirements_line" ]; then
 else
   "$vpy" -m pip install --disable-pip-version-check "${requirements[@]}" 2>&1 \
     | sed -u '/^Requirement already satisfied/d'
-  printf '%s\n%s\n' "$requirements_line" "" >"$stamp"
+  printf '%s\n%s\n' "$requirements_line" "$(sed -n 2p "$stamp" 2>/dev/null || true)" >"$stamp.new"
+  mv "$stamp.new" "$stamp"
 fi
 
 step 4 "build/: the FMUs and the ctypes libraries, $platforms platform$([ "$platforms" = all ] && echo s) (CMake + Ninja)"
-# the host build first (what the first result needs), one build tree for setup, tests and wheels
+# the host build first (what the first result needs), one build tree for setup, tests and wheels;
 # the environment's CMake (a requirement of fmpy), as tools/test.sh and tools/build_wheels.sh
 # use it: another CMake would regenerate build/ and compile everything again
 cmake="cmake"
@@ -176,7 +177,8 @@ if [ "$(sed -n 2p "$stamp")" = "$wheel_hash" ] && installed; then
 else
   "$vpy" -m pip install --disable-pip-version-check --no-deps --force-reinstall "$wheel" 2>&1 \
     | sed -u '/^Requirement already satisfied/d'
-  printf '%s\n%s\n' "$(sed -n 1p "$stamp")" "$wheel_hash" >"$stamp"
+  printf '%s\n%s\n' "$(sed -n 1p "$stamp")" "$wheel_hash" >"$stamp.new"
+  mv "$stamp.new" "$stamp"
 fi
 echo
 echo "setup: done in ${SECONDS}s: $(env -u PYTHONPATH "$vpy" -c 'import csfh, csfh.paths; print("csfh", csfh.__version__, "with", csfh.paths.fmu_path())')"

@@ -19,6 +19,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from fmpy import read_model_description
 
 from csfh import load_scene
 from csfh.model.core import INTERFACE
@@ -40,6 +41,7 @@ WINDOWS_SYSTEM_DLL = re.compile(
 )
 # the states' scales (m, m, rad, m/s, m/s, rad/s), as the FMU's platform tests use them
 STATE_SCALES = (0.01, 0.01, 0.1, 0.1, 0.1, 1.0)
+WIN_LINUX = (("win64", ".exe"), ("linux64", ""))  # the ctypes drivers' platforms and suffixes
 
 
 def need(condition: bool, reason: str) -> None:
@@ -204,6 +206,56 @@ def test_windows_libraries_under_wine_reproduce_linux(
             abs(a - b) / s for a, b, s in zip(on_windows[run][0], x, STATE_SCALES, strict=True)
         ]
         assert max(errors) <= 1e-9, (run, on_windows[run], x)
+
+
+def batch_run(command: list[str], library: Path, fmu: Path, env: dict[str, str] | None) -> str:
+    """ctypes_driver.c's batch mode: one co-simulation run of `fmu` (a binary of the unpacked
+    FMU) through csfh_cs_batch_run; its output line."""
+    md = read_model_description(str(fmu.parents[2]))
+    variables = {v.name: v for v in md.modelVariables}
+    scene_name, law, stop = DRIVER_CASES[0]
+    scene = load_scene(scene_name)
+    states = [v.name for v in INTERFACE.states]
+    starts = {**scene.parameter_values(law), **dict(zip(states, scene.x0, strict=True))}
+    kind = {"Real": "r", "Boolean": "b"}
+    args = [
+        f"{variables[n].valueReference}:{kind.get(variables[n].type, 'i')}={float(v)!r}"
+        for n, v in starts.items()
+    ]
+    outputs = ",".join(str(variables[n].valueReference) for n in states)
+    text = output(*command, str(library), repr(stop), str(fmu), md.guid, outputs, *args, env=env)
+    assert text.startswith("batch ") and " status=0 " in text, text
+    return text
+
+
+def test_windows_batch_library_under_wine_reproduces_linux(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> None:
+    """The Windows wheel's csfh_batch.dll runs the FMU's win64 binary under wine (driven by the
+    win64 ctypes_driver), the manylinux libcsfh_batch.so its linux64 binary: the same end
+    states to 1e-9 of each state's scale, through contacts."""
+    windows = unpacked("win_amd64", tmp_path_factory)
+    linux = unpacked("manylinux_2_17_x86_64", tmp_path_factory)
+    fmu = tmp_path_factory.mktemp("fmu")
+    with zipfile.ZipFile(linux / "csfh.fmu") as z:
+        z.extractall(fmu)
+    drivers = [BUILD / "platforms" / p / f"csfh_ctypes_driver{s}" for p, s in WIN_LINUX]
+    need(all(d.is_file() for d in drivers), "the cross-built ctypes drivers are not in build/")
+    env = dict(os.environ, WINEDEBUG="-all")
+    env["WINEPREFIX"] = str(tmp_path_factory.mktemp("wineprefix"))
+    wine = tool("wine64", "/usr/lib/wine/wine64", "wine")
+    on_windows = batch_run(
+        [wine, str(drivers[0])], windows / "csfh_batch.dll", fmu / "binaries/win64/csfh.dll", env
+    )
+    on_linux = batch_run(
+        [str(drivers[1])], linux / "libcsfh_batch.so", fmu / "binaries/linux64/csfh.so", None
+    )
+    values = [
+        [float(v) for v in line.split(" x=")[1].split()[0].split(",")]
+        for line in (on_windows, on_linux)
+    ]
+    errors = [abs(a - b) / s for a, b, s in zip(*values, STATE_SCALES, strict=True)]
+    assert max(errors) <= 1e-9, (on_windows, on_linux)
 
 
 def test_windows_libraries_export_only_the_api_and_import_only_system_dlls(
