@@ -184,7 +184,8 @@ echo
 echo "setup: done in ${SECONDS}s: $(env -u PYTHONPATH "$vpy" -c 'import csfh, csfh.paths; print("csfh", csfh.__version__, "with", csfh.paths.fmu_path())')"
 if [ "$platforms" = host ]; then
   echo "setup: the FMUs have the linux64 binary of this machine's compiler; for win64, darwin64 and"
-  echo "       glibc-2.17 linux64 binaries too: tools/setup.sh --platforms all (a few minutes more)"
+  echo "       glibc-2.17 linux64 binaries too: tools/setup.sh --platforms all (3 to 6 min more on"
+  echo "       2 cores, most of it zig's first build of its Windows runtime: docs/guide/install.md)"
 fi
 if [ "$(cd "$venv" && pwd -P)" != "$(cd "${VIRTUAL_ENV:-/nonexistent}" 2>/dev/null && pwd -P || true)" ]; then
   echo "setup: activate it in this shell:  . $venv/bin/activate"
