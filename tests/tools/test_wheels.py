@@ -10,11 +10,14 @@ Without the wheels (tools/build_wheels.sh not run) the tests are skipped, except
 
 from __future__ import annotations
 
+import base64
+import hashlib
 import os
 import re
 import shutil
 import subprocess
 import sys
+import time
 import zipfile
 from pathlib import Path
 
@@ -297,3 +300,73 @@ def test_macos_libraries_are_universal_and_export_only_the_api(
             used = output(tool("llvm-objdump"), "--macho", "--dylibs-used", f"--arch={arch}", path)
             dylibs = [line.split()[0] for line in used.splitlines()[1:] if line.strip()]
             assert dylibs[1:] == ["/usr/lib/libSystem.B.dylib"], used
+
+
+# ------------------------------------------------------------------------------------------
+# tools/wheel.py on a build tree of stand-ins (no compiled files needed)
+
+
+def fake_build(root: Path, fmi2_platforms: tuple[str, ...]) -> Path:
+    """A build tree with FMUs holding `fmi2_platforms`' binaries (and the FMI 3.0 tuples of
+    those) and stand-ins for every platform's ctypes libraries."""
+    tuples = {"linux64": ["x86_64-linux"], "win64": ["x86_64-windows"]}
+    tuples["darwin64"] = ["x86_64-darwin", "aarch64-darwin"]
+    build = root / "build"
+    for name in FMUS:
+        path = build / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fmi3 = name.startswith("fmi3/")
+        platforms = [t for p in fmi2_platforms for t in tuples[p]] if fmi3 else fmi2_platforms
+        with zipfile.ZipFile(path, "w") as z:
+            for platform in platforms:
+                z.writestr(f"binaries/{platform}/{Path(name).stem}.bin", platform)
+    libraries = {
+        "": LIBRARIES["manylinux_2_17_x86_64"],
+        "platforms/linux64/lib": LIBRARIES["manylinux_2_17_x86_64"],
+        "platforms/win64/lib": LIBRARIES["win_amd64"],
+    }
+    for directory, names in libraries.items():
+        (build / directory).mkdir(parents=True, exist_ok=True)
+        for name in names:
+            (build / directory / name).write_bytes(name.encode())
+    return build
+
+
+def wheel_tool(*args: str) -> subprocess.CompletedProcess[str]:
+    command = [sys.executable, str(ROOT / "tools" / "wheel.py"), *args]
+    return subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
+
+
+def test_a_platform_wheel_of_host_only_fmus_is_refused(tmp_path: Path) -> None:
+    build = fake_build(tmp_path, ("linux64",))
+    proc = wheel_tool("--build", str(build), "--platform", "win64", str(tmp_path / "out"))
+    assert proc.returncode == 2, proc
+    assert len(proc.stderr.splitlines()) == 1 and "csfh.fmu lacks win64, darwin64" in proc.stderr
+    assert not list((tmp_path / "out").glob("*"))
+
+
+def test_the_same_build_gives_the_same_wheel_and_its_record_holds(tmp_path: Path) -> None:
+    """tools/setup.sh reinstalls only when the wheel's hash changes: the same files must give
+    the same bytes; RECORD lists every file with its sha256 and size."""
+    build = fake_build(tmp_path, ("linux64", "win64", "darwin64"))
+    wheels = []
+    for directory in ("a", "b"):
+        out = wheel_tool("--build", str(build), "--platform", "win64", str(tmp_path / directory))
+        wheels.append(Path(out.stdout.strip()))
+        # the second wheel: later, of files with other modification times
+        for path in build.rglob("*"):
+            os.utime(path, (1e9, 1e9))
+        time.sleep(2.1)  # (a zip's time stamps have a resolution of 2 s)
+    first, second = wheels
+    assert first.name.endswith("-py3-none-win_amd64.whl") and first.name == second.name
+    assert first.read_bytes() == second.read_bytes()
+    with zipfile.ZipFile(first) as z:
+        record = next(n for n in z.namelist() if n.endswith(".dist-info/RECORD"))
+        rows = [line.split(",") for line in z.read(record).decode().splitlines()]
+        assert {r[0] for r in rows} == set(z.namelist())
+        for name, digest, size in rows:
+            if name != record:
+                data = z.read(name)
+                expected = base64.urlsafe_b64encode(hashlib.sha256(data).digest()).rstrip(b"=")
+                assert digest == f"sha256={expected.decode()}" and int(size) == len(data), name
+        assert z.read("csfh/csfh_core.dll") == b"csfh_core.dll"
