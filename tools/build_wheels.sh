@@ -20,6 +20,8 @@ cd "$(dirname "$0")/.."
 venv="${CSFH_VENV:-.venv}"
 vpy="$venv/bin/python"
 [ -x "$vpy" ] || { echo "build_wheels: no $vpy: run tools/setup.sh --platforms all first" >&2; exit 2; }
+"$vpy" -c 'import ziglang' 2>/dev/null ||
+  { echo "build_wheels: no zig in $venv: run tools/setup.sh --platforms all first" >&2; exit 2; }
 
 # the CMake tools/setup.sh builds with (the environment's, a requirement of fmpy): another
 # version would regenerate build/ and compile everything again
