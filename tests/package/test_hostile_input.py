@@ -215,3 +215,33 @@ def test_too_many_runs_are_refused_before_any_runs(
     limit = MAX_DIRECTIONS if "directions" in needle else MAX_RUNS
     assert needle in line and f"{limit:g}" in line, line
     assert not (tmp_path / "o").exists() or not any((tmp_path / "o").glob("*.jsonl"))
+
+
+# ------------------------------------------------------------------------------------------
+# a body so light that Moreau's Delassus matrix overflows: refused by the model's own check (the
+# C core's, which the FMU, the scene loader and the Moreau stepper share), not run through the
+# bore
+
+
+@pytest.mark.parametrize("law", ["Moreau", "LN_spheres"])
+def test_a_body_too_light_for_the_doubles_is_refused_for_every_model(
+    tmp_path: Path, law: str
+) -> None:
+    scene = tmp_path / "light.toml"
+    scene.write_text(
+        (ROOT / "python/csfh/scenes/central.toml").read_text()
+        + '\n[parameters]\n"body1.m" = 1e-200\n"body1.I" = 1e-200\n'
+    )
+    proc = run_csfh(
+        "run",
+        str(scene),
+        "--law",
+        law,
+        "--out",
+        str(tmp_path / "o"),
+        cwd=tmp_path,
+        env=csfh_env(),
+    )
+    line = _one_line(proc)
+    assert str(scene) in line and "body1.m = 1e-200" in line and "is not finite" in line, line
+    assert not (tmp_path / "o").exists()
