@@ -30,6 +30,18 @@ SIGNALS = ("x", "y", "theta", "F_N", "F_T")
 points; F_N and F_T the value of largest magnitude in each output interval (t_k-1, t_k] (over
 every integrator step the run recorded), so that an impact peak does not depend on where the
 grid happens to cut it."""
+IMPULSIVE_MODELS = frozenset({"Moreau"})
+"""Models whose F_N and F_T are not a contact law's forces but each step's impulse over the step,
+Lambda / h (docs/model.md §6): they scale as 1/h (about 1e6 N at h = 1e-5 s where the laws give
+1e4 N), so they are labelled wherever they are printed or plotted (`force_label`)."""
+
+
+def force_label(model: str, name: str = "F_N") -> str:
+    """The force `name` of `model` as printed beside the laws' forces: Moreau's is marked as an
+    impulse over the step."""
+    return f"{name} (impulse/h)" if model in IMPULSIVE_MODELS else name
+
+
 UNITS = {
     "t": "s",
     "x": "m",
