@@ -245,3 +245,50 @@ def test_a_body_too_light_for_the_doubles_is_refused_for_every_model(
     line = _one_line(proc)
     assert str(scene) in line and "body1.m = 1e-200" in line and "is not finite" in line, line
     assert not (tmp_path / "o").exists()
+
+
+# ------------------------------------------------------------------------------------------
+# an output directory that cannot be used is found before anything is computed
+
+
+class Unreachable:
+    """A runner that fails the test if a run is computed."""
+
+    batches = same_parameters = exclusive = False
+
+    def __init__(self, interface: str, models: tuple[str, ...]) -> None:
+        self.interface, self.models = interface, models
+
+    def run(self, *args: object, **kwargs: object) -> object:
+        raise AssertionError("computed before the output directory was checked")
+
+    run_many = run
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["run", "central", "--law", "LN_spheres"],
+        ["run", "central", "--law", "Moreau"],
+        ["compare", "central"],
+    ],
+    ids=["run-me", "run-moreau", "compare"],
+)
+def test_an_unusable_out_is_found_before_computing(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    argv: list[str],
+) -> None:
+    from csfh.cli.main import main
+    from csfh.runners import registry
+
+    for key, runner in list(registry.RUNNERS.items()):
+        monkeypatch.setitem(registry.RUNNERS, key, Unreachable(runner.interface, runner.models))
+    blocker = tmp_path / "a file"
+    blocker.write_text("x\n")
+    assert main([*argv, "--out", str(blocker / "sub"), "--quiet"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err == [
+        f"csfh: error: {blocker / 'sub'}: is not a usable output directory (Not a directory)"
+    ]

@@ -86,10 +86,12 @@ def add_quiet(p: argparse.ArgumentParser) -> None:
 
 
 def out_dir(args: argparse.Namespace, *default: str) -> Path:
-    """--out, else results/<default...>."""
+    """--out, else results/<default...>: checked now, before the command computes anything
+    (a directory it cannot write is found before the run, not after)."""
     from ..output import results_dir
+    from ..safepath import check_output_directory
 
-    return results_dir(args.out, *default)
+    return check_output_directory(results_dir(args.out, *default))
 
 
 def positive_int(text: str) -> int:
