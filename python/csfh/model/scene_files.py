@@ -37,13 +37,14 @@ def locate(
     arg: str | Path, builtins: Collection[str], what: str = "scene", error: type = SceneError
 ) -> Path | None:
     """The file `arg` names, or None for the built-in scene of that name (module docstring);
-    `error` (a SceneError type) naming the argument when it names neither."""
+    `error` (a SceneError type) naming the argument when it names neither (`what`: the kind of
+    file asked for, scene or tolerance)."""
     text, path = str(arg), Path(arg)
     if _is_bare(text) and text in builtins:
         if path.exists() and not path.is_dir():
             raise error(
-                f"{text!r} is both the built-in {what} and the file ./{text} in this directory: "
-                f"give ./{text} for the file, or {builtin_path(text)} for the built-in {what}"
+                f"{text!r} is both a built-in scene and the file ./{text} in this directory: "
+                f"give ./{text} for the file, or {builtin_path(text)} for the built-in scene"
             )
         return None
     if path.suffix == ".toml" or path.exists():
@@ -53,7 +54,7 @@ def locate(
             raise error(f"{path}: no such {what} file")
         return path
     raise error(
-        f"unknown {what} {text!r}: use one of {', '.join(sorted(builtins))} or the path of a "
+        f"unknown scene {text!r}: use one of {', '.join(sorted(builtins))} or the path of a "
         f".toml {what} file"
     )
 
