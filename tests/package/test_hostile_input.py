@@ -5,6 +5,7 @@ naming the key, the option or the file (or, for a byte-order mark, in the scene 
 
 from __future__ import annotations
 
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -123,12 +124,12 @@ def test_a_directory_named_like_a_builtin_scene_is_not_a_scene(
 # the command line
 
 
-def _one_line(proc: object) -> str:
-    err = proc.stderr  # type: ignore[attr-defined]
-    lines = err.splitlines()
-    assert proc.returncode == 2 and len(lines) == 1, err  # type: ignore[attr-defined]
-    assert lines[0].startswith("csfh") and "error: " in lines[0], err
-    return str(lines[0])
+def _one_line(proc: subprocess.CompletedProcess[str]) -> str:
+    """The one line of a refused command (exit status 2, nothing else on standard error)."""
+    lines = proc.stderr.splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr
+    assert lines[0].startswith("csfh: error: "), proc.stderr
+    return lines[0]
 
 
 def test_an_empty_out_is_refused(tmp_path: Path) -> None:
