@@ -293,3 +293,34 @@ def test_an_unusable_out_is_found_before_computing(
     assert err == [
         f"csfh: error: {blocker / 'sub'}: is not a usable output directory (Not a directory)"
     ]
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "needle"),
+    [
+        (
+            '"contact.R1" = {sigma = 2e-5}',
+            f'"contact.R1" = {{sigma = {HUGE}}}',
+            "sigma = 1.000e+400",
+        ),
+        (
+            '"contact.R1" = {sigma = 2e-5}',
+            f'"contact.R1" = {{sigma = 1e-5, mean = -{HUGE}}}',
+            "mean = -1.000e+400",
+        ),
+        ("runs = 500", f"runs = -{HUGE}", "montecarlo.runs = -1.000e+400"),
+    ],
+    ids=["sigma", "mean", "runs"],
+)
+def test_a_tolerance_file_with_an_integer_beyond_a_double_names_its_key(
+    tmp_path: Path, old: str, new: str, needle: str
+) -> None:
+    from csfh.studies.tolerance.study import load_study
+
+    path = tmp_path / "tol.toml"
+    assert old in TOLERANCE_FILE
+    path.write_text(TOLERANCE_FILE.replace(old, new, 1))
+    with pytest.raises(SceneError) as info:
+        load_study(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: ") and needle in message and len(message) < 400, message

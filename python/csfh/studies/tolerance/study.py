@@ -38,6 +38,7 @@ from ...model.instance import core_model, nominal_values
 from ...model.limits import MAX_RUNS, check_count
 from ...model.scene import Scene, scene_from_dict
 from ...model.scene_files import locate, parse, read_text
+from ...model.values import as_float, shown
 
 DEFAULT_FILE = "tolerance_csfh"
 RUNS_WHAT = "Monte Carlo samples per model (csfh.model.limits)"
@@ -79,8 +80,12 @@ class ToleranceStudy:
 
 
 def _finite(value: Any) -> bool:
-    """A finite number (not a boolean)."""
-    return not isinstance(value, bool) and isinstance(value, int | float) and math.isfinite(value)
+    """A finite number (not a boolean; not an integer beyond the doubles)."""
+    return (
+        not isinstance(value, bool)
+        and isinstance(value, int | float)
+        and math.isfinite(as_float(value))
+    )
 
 
 def _parse_distribution(key: str, spec: Any) -> Distribution:
@@ -97,10 +102,10 @@ def _parse_distribution(key: str, spec: Any) -> Distribution:
         raise ToleranceError(f"{where} needs exactly one of sigma (normal) or half_width (uniform)")
     width = spec[kinds[0]]
     if not _finite(width) or width <= 0:
-        raise ToleranceError(f"{where}: {kinds[0]} = {width!r} must be a number > 0")
+        raise ToleranceError(f"{where}: {kinds[0]} = {shown(width)} must be a number > 0")
     mean = spec.get("mean")
     if mean is not None and not _finite(mean):
-        raise ToleranceError(f"{where}: mean = {mean!r} must be a finite number")
+        raise ToleranceError(f"{where}: mean = {shown(mean)} must be a finite number")
     return Distribution(
         "normal" if kinds[0] == "sigma" else "uniform",
         float(width),
@@ -110,7 +115,7 @@ def _parse_distribution(key: str, spec: Any) -> Distribution:
 
 def _int_option(where: str, value: Any, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise ToleranceError(f"{where} = {value!r} must be an integer >= {minimum}")
+        raise ToleranceError(f"{where} = {shown(value)} must be an integer >= {minimum}")
     return value
 
 
