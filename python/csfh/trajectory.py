@@ -88,6 +88,11 @@ class Trajectory:
     releases: np.ndarray = field(default_factory=lambda: np.zeros(0))
     contact_records: dict[str, np.ndarray] = field(default_factory=dict)
 
+    def force_label(self, name: str = "F_N") -> str:
+        """The force `name` as printed beside other models' forces (`force_label`): Moreau's
+        says that it is an impulse over the step."""
+        return force_label(self.model, name)
+
     def __getitem__(self, column: str) -> np.ndarray:
         """A column of the output table, e.g. ``run["F_N"]`` (units in ``UNITS``)."""
         return self.table[column]

@@ -31,7 +31,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from ..model.scene import load_scene
     from ..output import output_set
     from ..runners.simulate import simulate
-    from ..trajectory import force_label
 
     scene = load_scene(args.scene)
     out = out_dir(args, scene.name)
@@ -43,7 +42,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     print(
         f"{scene.name} / {tr.model}: {s['contacts']} contacts"
         f"{f' (first at {first:.6f} s)' if first is not None else ''}, "
-        f"max {force_label(tr.model)} {s['max_F_N']:.4g} N, max indentation "
+        f"max {tr.force_label()} {s['max_F_N']:.4g} N, max indentation "
         f"{s['max_indentation']:.3g} m, "
         f"{s['steps']} steps, {s['wall_time']:.2f} s -> {path}"
     )
@@ -53,7 +52,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
 def _cmd_compare(args: argparse.Namespace) -> int:
     from ..model.scene import load_scene
     from ..studies.compare import compare
-    from ..trajectory import force_label
 
     scene = load_scene(args.scene)
     out = out_dir(args, scene.name)
@@ -64,7 +62,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
             first = s["first_contact_time"]
             print(
                 f"  {tr.model:<13} first contact {first if first is None else f'{first:.6f}'}"
-                f" s, {s['contacts']:3d} contacts, max {force_label(tr.model):<16} "
+                f" s, {s['contacts']:3d} contacts, max {tr.force_label():<16} "
                 f"{s['max_F_N']:10.4g} N, "
                 f"{s['wall_time']:6.2f} s"
             )
