@@ -324,3 +324,27 @@ def test_a_tolerance_file_with_an_integer_beyond_a_double_names_its_key(
         load_study(path)
     message = str(info.value)
     assert message.startswith(f"{path}: ") and needle in message and len(message) < 400, message
+
+
+def test_fingers_beyond_the_fmus_integer_are_refused_not_wrapped(tmp_path: Path) -> None:
+    """4294967301 = 2^32 + 5 would wrap to 5 in the FMU's 32-bit Integer."""
+    path = tmp_path / "wrap.toml"
+    path.write_text(_with(COSIM, "fingers", "4294967301"))
+    with pytest.raises(SceneError, match=r"fingers = 4294967301 is out of range \[1, 2147483647\]"):
+        load_scene(path)
+
+
+def test_an_integer_beyond_a_double_is_one_line_on_the_command_line(tmp_path: Path) -> None:
+    path = tmp_path / "big.toml"
+    path.write_text(f"stop_time = {HUGE}\n")
+    proc = run_csfh(
+        "run",
+        str(path),
+        "--law",
+        "Moreau",
+        "--out",
+        str(tmp_path / "o"),
+        cwd=tmp_path,
+        env=csfh_env(),
+    )
+    assert _one_line(proc) == f"csfh: error: {path}: stop_time = 1.000e+400 must be a finite number"
