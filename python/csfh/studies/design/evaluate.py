@@ -1,0 +1,195 @@
+"""A design's evaluation: its parameter overrides, its shock runs (one task per direction, the
+same tasks `csfh shock` runs on the design's scene file), and its measures.
+
+Per direction, as shock.json gives them: the peak flexure stress and contact pressure with
+their margins (docs/model.md Eq. (14.7)), the contacts, and the settling time, the end of the
+last contact (after it body 1 swings on the flexure without impacts; the horizon when a contact
+is still on at the end, 0 without contact). Over the directions, every objective is the worst
+(largest) value and every margin the smallest. The parasitic motion is the static displacement
+of the centre G1 under the study's nominal moment (the flexure's elastic force, gravity and the
+scene's inputs in equilibrium, docs/model.md §2.4; contact is not part of it), from the C core in
+this process: it is deterministic wherever the shock runs are computed."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ...batch.store import ResultStore
+from ...batch.tasks import Task
+from ...model.instance import core_model, nominal_values
+from ...model.scene import Scene
+from ..execution import Execution, counts, execute
+from ..shock import STEP_FACTOR
+from ..shock import study as shock
+from .spec import CLEARANCE, DesignStudy
+
+
+def shock_spec(study: DesignStudy, scene: Scene) -> shock.ShockSpec:
+    """The shock study `csfh shock SCENE --condition C --direction D` runs, over the study's
+    directions with its one law (the scene at rest, the default horizon and step)."""
+    scene = shock.at_rest(scene)
+    return shock.ShockSpec(
+        scene=scene,
+        pulse=study.pulse,
+        directions=study.directions,
+        models=(study.law,),
+        start=0.0,
+        stop_time=scene.stop_time,
+        step=STEP_FACTOR * scene.integrator.output_interval,
+    )
+
+
+def parameters_of(study: DesignStudy, r2: float, x: Sequence[float]) -> dict[str, float]:
+    """The FMU parameter overrides of design x (the clearance sets R1 = R2 - clearance)."""
+    out = {}
+    for name, value in zip(study.names, x, strict=True):
+        if name == CLEARANCE:
+            out["contact.R1"] = r2 - float(value)
+        else:
+            out[name] = float(value)
+    return out
+
+
+def parasitic(scene: Scene, values: dict[str, Any], moment: float) -> dict[str, float]:
+    """The static displacement of G1 caused by the moment `moment` about it: the equilibria
+    Q(q) + [0, 0, M] = 0 with M = moment and M = 0 (Newton's method on the C core's smooth
+    forces, a central-difference Jacobian), the distance between their centres and the
+    rotation."""
+    from scipy.optimize import root
+
+    model = core_model(scene, values)
+
+    def residual(q: np.ndarray, m: float) -> np.ndarray:
+        return np.asarray(model.smooth_forces(q)) + np.array([0.0, 0.0, m])
+
+    q0 = np.array(scene.q0, dtype=float)
+    ends = []
+    for m in (0.0, moment):
+        sol = root(residual, q0, args=(m,), method="hybr", options={"xtol": 1e-13})
+        ends.append(np.asarray(sol.x))
+    d = ends[1] - ends[0]
+    return {"parasitic": float(math.hypot(d[0], d[1])), "rotation": float(d[2])}
+
+
+@dataclass
+class Evaluator:
+    """Evaluates designs of a study on a scene through the batch engine into `store`."""
+
+    study: DesignStudy
+    scene: Scene
+    store: ResultStore
+    how: Execution
+    spec: shock.ShockSpec = field(init=False)
+    r2: float = field(init=False)
+    allowables: dict[str, float] = field(init=False)
+    runs: dict[str, int] = field(default_factory=lambda: {"tasks": 0, "computed": 0, "reused": 0})
+    executor: str = ""
+    _parasitic: dict[tuple[float, ...], dict[str, float]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.spec = shock_spec(self.study, self.scene)
+        self.r2 = nominal_values(self.spec.scene, ["contact.R2"])["contact.R2"]
+        self.allowables = shock.allowables(self.spec.scene)
+
+    def tasks(self, designs: np.ndarray, directions: Sequence[float]) -> list[Task]:
+        """One task per design (a row of `designs`) and direction."""
+        out = []
+        for i, x in enumerate(designs):
+            values = parameters_of(self.study, self.r2, x)
+            for d in directions:
+                params = {**shock.pulse_parameters(self.spec, d), **values}
+                out.append(
+                    Task(
+                        scene=self.spec.scene,
+                        model=self.study.law,
+                        parameters=tuple(sorted(params.items())),
+                        stop_time=self.spec.stop_time,
+                        output_interval=self.spec.step,
+                        interface="cs",
+                        signals=False,
+                        meta=(("design", i), ("direction", d)),
+                    )
+                )
+        return out
+
+    def evaluate(
+        self, designs: np.ndarray, label: str, directions: Sequence[float] | None = None
+    ) -> list[dict[str, Any]]:
+        """The measures of every design (rows of `designs`, in the variables' order)."""
+        dirs = tuple(self.spec.directions if directions is None else directions)
+        designs = np.atleast_2d(np.asarray(designs, dtype=float))
+        tasks = self.tasks(designs, dirs)
+        report = counts(execute(tasks, self.store, self.how, label))
+        for key in self.runs:
+            self.runs[key] += report[key]
+        self.executor = report["executor"]
+        per = len(dirs)
+        return [
+            self.measures(x, tasks[i * per : (i + 1) * per]) for i, x in enumerate(designs)
+        ]
+
+    def row(self, task: Task) -> dict[str, Any]:
+        """One direction of a design, with the fields of shock.json's per-direction rows."""
+        s = self.store.summary(task.key)
+        stress, pressure = s["peak_flexure_stress"], s["peak_contact_pressure"]
+        m_f = shock.margin(stress, self.allowables["flexure.stress_allowable"])
+        m_c = shock.margin(pressure, self.allowables["contact.pressure_allowable"])
+        if s["contact_at_end"]:
+            settling = self.spec.stop_time
+        else:
+            settling = 0.0 if s["last_release"] is None else float(s["last_release"])
+        return {
+            "direction": dict(task.meta)["direction"],
+            "flexure_stress": stress,
+            "contact_pressure": pressure,
+            "flexure_margin": m_f,
+            "contact_margin": m_c,
+            "passed": bool(m_f >= 0.0 and m_c >= 0.0),
+            "contacts": s["contacts"],
+            "first_contact": s["first_contact"],
+            "peak_F_N": s["peak_F_N"],
+            "steps": s["steps"],
+            "settling_time": settling,
+        }
+
+    def static(self, x: np.ndarray) -> dict[str, float]:
+        key = tuple(float(v) for v in x)
+        if key not in self._parasitic:
+            values = parameters_of(self.study, self.r2, x)
+            self._parasitic[key] = parasitic(
+                self.spec.scene, values, self.study.parasitic_moment or 0.0
+            )
+        return self._parasitic[key]
+
+    def measures(self, x: np.ndarray, tasks: Sequence[Task]) -> dict[str, Any]:
+        """A design's rows, worst direction, objectives, margins and feasibility."""
+        rows = [self.row(t) for t in tasks]
+        worst = min(rows, key=lambda r: min(r["flexure_margin"], r["contact_margin"]))
+        static = self.static(x)
+        margins = {
+            "flexure_margin": min(r["flexure_margin"] for r in rows),
+            "contact_margin": min(r["contact_margin"] for r in rows),
+        }
+        need = self.study.constraints
+        return {
+            "variables": dict(zip(self.study.names, (float(v) for v in x), strict=True)),
+            "parameters": parameters_of(self.study, self.r2, x),
+            "worst_direction": worst["direction"],
+            "objectives": {
+                "flexure_stress": max(r["flexure_stress"] for r in rows),
+                "contact_pressure": max(r["contact_pressure"] for r in rows),
+                "contacts": max(r["contacts"] for r in rows),
+                "settling_time": max(r["settling_time"] for r in rows),
+                "parasitic": static["parasitic"],
+            },
+            "rotation": static["rotation"],
+            "margins": margins,
+            "violation": sum(max(0.0, need[k] - margins[k]) for k in need),
+            "feasible": all(margins[k] >= need[k] for k in need),
+            "directions": rows,
+        }
