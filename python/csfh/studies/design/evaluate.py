@@ -89,18 +89,17 @@ class Evaluator:
     allowables: dict[str, float] = field(init=False)
     runs: dict[str, int] = field(default_factory=lambda: {"tasks": 0, "computed": 0, "reused": 0})
     executor: str = ""
-    _parasitic: dict[tuple[float, ...], dict[str, float]] = field(default_factory=dict)
+    _parasitic: dict[tuple[tuple[str, float], ...], dict[str, float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.spec = shock_spec(self.study, self.scene)
         self.r2 = nominal_values(self.spec.scene, ["contact.R2"])["contact.R2"]
         self.allowables = shock.allowables(self.spec.scene)
 
-    def tasks(self, designs: np.ndarray, directions: Sequence[float]) -> list[Task]:
-        """One task per design (a row of `designs`) and direction."""
+    def tasks(self, sets: Sequence[dict[str, float]], directions: Sequence[float]) -> list[Task]:
+        """One task per parameter set (a design's overrides) and direction."""
         out = []
-        for i, x in enumerate(designs):
-            values = parameters_of(self.study, self.r2, x)
+        for i, values in enumerate(sets):
             for d in directions:
                 params = {**shock.pulse_parameters(self.spec, d), **values}
                 out.append(
@@ -121,16 +120,29 @@ class Evaluator:
         self, designs: np.ndarray, label: str, directions: Sequence[float] | None = None
     ) -> list[dict[str, Any]]:
         """The measures of every design (rows of `designs`, in the variables' order)."""
-        dirs = tuple(self.spec.directions if directions is None else directions)
         designs = np.atleast_2d(np.asarray(designs, dtype=float))
-        tasks = self.tasks(designs, dirs)
+        sets = [parameters_of(self.study, self.r2, x) for x in designs]
+        named = [dict(zip(self.study.names, map(float, x), strict=True)) for x in designs]
+        return self.evaluate_sets(sets, named, label, directions)
+
+    def evaluate_sets(
+        self,
+        sets: Sequence[dict[str, float]],
+        variables: Sequence[dict[str, float]],
+        label: str,
+        directions: Sequence[float] | None = None,
+    ) -> list[dict[str, Any]]:
+        """The measures of parameter sets (overrides of the scene), each named by `variables`."""
+        dirs = tuple(self.spec.directions if directions is None else directions)
+        tasks = self.tasks(sets, dirs)
         report = counts(execute(tasks, self.store, self.how, label))
         for key in self.runs:
             self.runs[key] += report[key]
         self.executor = report["executor"]
-        per = len(dirs)
+        n = len(dirs)
         return [
-            self.measures(x, tasks[i * per : (i + 1) * per]) for i, x in enumerate(designs)
+            self.measures(values, named, tasks[i * n : (i + 1) * n])
+            for i, (values, named) in enumerate(zip(sets, variables, strict=True))
         ]
 
     def row(self, task: Task) -> dict[str, Any]:
@@ -157,28 +169,29 @@ class Evaluator:
             "settling_time": settling,
         }
 
-    def static(self, x: np.ndarray) -> dict[str, float]:
-        key = tuple(float(v) for v in x)
+    def static(self, values: dict[str, float]) -> dict[str, float]:
+        key = tuple(sorted(values.items()))
         if key not in self._parasitic:
-            values = parameters_of(self.study, self.r2, x)
             self._parasitic[key] = parasitic(
                 self.spec.scene, values, self.study.parasitic_moment or 0.0
             )
         return self._parasitic[key]
 
-    def measures(self, x: np.ndarray, tasks: Sequence[Task]) -> dict[str, Any]:
+    def measures(
+        self, values: dict[str, float], variables: dict[str, float], tasks: Sequence[Task]
+    ) -> dict[str, Any]:
         """A design's rows, worst direction, objectives, margins and feasibility."""
         rows = [self.row(t) for t in tasks]
         worst = min(rows, key=lambda r: min(r["flexure_margin"], r["contact_margin"]))
-        static = self.static(x)
+        static = self.static(values)
         margins = {
             "flexure_margin": min(r["flexure_margin"] for r in rows),
             "contact_margin": min(r["contact_margin"] for r in rows),
         }
         need = self.study.constraints
         return {
-            "variables": dict(zip(self.study.names, (float(v) for v in x), strict=True)),
-            "parameters": parameters_of(self.study, self.r2, x),
+            "variables": dict(variables),
+            "parameters": dict(values),
             "worst_direction": worst["direction"],
             "objectives": {
                 "flexure_stress": max(r["flexure_stress"] for r in rows),
