@@ -156,7 +156,8 @@ def plot_best(path: Path, study: DesignStudy, entries: list[dict[str, Any]]) -> 
     ax.set_ylim(min(0.0, *f, *c) - 0.05, 1.0)
     ax.grid(alpha=0.3, axis="y")
     ax.legend(fontsize=8, loc="lower right")
-    ax.set_title("Best designs: margins 1 − peak/allowable (dashed: the required minimums)",
-                 fontsize=9)
+    ax.set_title(
+        "Best designs: margins 1 − peak/allowable (dashed: the required minimums)", fontsize=9
+    )
     fig.tight_layout()
     return save(fig, path, dpi=110)

@@ -62,8 +62,7 @@ def json_data(
 
 
 def _fmt(key: str, v: float) -> str:
-    label, unit, scale = figures.LABELS[key]
-    return f"{v * scale:.4g}"
+    return f"{v * figures.LABELS[key][2]:.4g}"
 
 
 def _objective_header(study: DesignStudy) -> str:
@@ -76,7 +75,10 @@ def _objective_header(study: DesignStudy) -> str:
 def _best_lines(study: DesignStudy, entries: list[dict[str, Any]]) -> list[str]:
     names = study.names
     lines = [
-        "| design | scene file | " + " | ".join(names) + " | " + _objective_header(study)
+        "| design | scene file | "
+        + " | ".join(names)
+        + " | "
+        + _objective_header(study)
         + " | flexure margin | contact margin | worst direction | feasible |",
         "|---" * (len(names) + len(study.objectives) + 6) + "|",
     ]
@@ -136,9 +138,7 @@ def _ranking_lines(study: DesignStudy, s: dict[str, Any]) -> list[str]:
     for rank, i in enumerate(order, start=1):
         key = s["inputs"][i]
         levels = ALL_PARAMETERS[key].table4 or ()
-        lines.append(
-            f"| {rank} | {key} | {st[i]:.3f} | {' '.join(arrows[v] for v in levels)} |"
-        )
+        lines.append(f"| {rank} | {key} | {st[i]:.3f} | {' '.join(arrows[v] for v in levels)} |")
     return [*lines, ""]
 
 
@@ -184,7 +184,8 @@ def _markdown(
     ]
     lines += [f"![{f.stem}]({f.name})\n" for f in figs]
     if result["sensitivity"] is not None:
-        lines += ["## Sensitivity (Sobol indices)", "", *_sensitivity_lines(study, result["sensitivity"])]
+        lines += ["## Sensitivity (Sobol indices)", ""]
+        lines += _sensitivity_lines(study, result["sensitivity"])
     return "\n".join(lines) + "\n"
 
 

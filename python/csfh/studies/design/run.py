@@ -85,8 +85,10 @@ def _write_scenes(
     for k, design in enumerate(best, start=1):
         name = f"{scene.name}_design_{k}"
         rel = f"{SCENES}/{name}.toml"
-        how = f"--condition {study.pulse.name}" if study.pulse.name else (
-            f"--peak {study.pulse.peak_g!r} --duration {study.pulse.duration!r}"
+        how = (
+            f"--condition {study.pulse.name}"
+            if study.pulse.name
+            else (f"--peak {study.pulse.peak_g!r} --duration {study.pulse.duration!r}")
         )
         header = (
             f"Design {k} of the design study of scene {scene.name} ({study.source}), written\n"
@@ -105,9 +107,7 @@ def _write_scenes(
     return entries
 
 
-def _sensitivity(
-    study: DesignStudy, ev: Evaluator, direction: float
-) -> dict[str, Any] | None:
+def _sensitivity(study: DesignStudy, ev: Evaluator, direction: float) -> dict[str, Any] | None:
     """Sobol indices of the objectives to the design variables and the paper's parameters, at
     one direction (None: no sensitivity samples)."""
     n = study.sensitivity_samples

@@ -111,10 +111,14 @@ class DesignStudy:
     def quick_study(self) -> DesignStudy:
         """The study with its [quick] values."""
         q = dict(self.quick)
-        n_dirs = q.pop("directions", len(self.directions))
-        sens = q.pop("sensitivity_samples", self.sensitivity_samples)
         return replace(
-            self, directions=_directions(n_dirs), sensitivity_samples=sens, **q, quick=()
+            self,
+            directions=_directions(q.get("directions", len(self.directions))),
+            sensitivity_samples=q.get("sensitivity_samples", self.sensitivity_samples),
+            samples=q.get("samples", self.samples),
+            generations=q.get("generations", self.generations),
+            population=q.get("population", self.population),
+            quick=(),
         )
 
 
@@ -140,6 +144,17 @@ def _int(where: str, value: Any, minimum: int) -> int:
     return value
 
 
+def _range(where: str, rng: Any, positive: bool) -> tuple[float, float]:
+    if not (isinstance(rng, list) and len(rng) == 2 and all(_finite(v) for v in rng)):
+        raise StudyError(f"{where} = {rng!r} must be a range [low, high] of two numbers")
+    lo, hi = float(rng[0]), float(rng[1])
+    if not lo < hi:
+        raise StudyError(f"{where} = {rng!r}: low must be < high")
+    if positive and lo <= 0:
+        raise StudyError(f"{where} = {rng!r}: the range must be > 0")
+    return lo, hi
+
+
 def _variables(table: Any) -> dict[str, tuple[float, float]]:
     table = _table("[variables]", table)
     if not table:
@@ -151,18 +166,9 @@ def _variables(table: Any) -> dict[str, tuple[float, float]]:
     }
     out = {}
     for key, rng in table.items():
-        where = f"variables.{key!r}"
         if key != CLEARANCE and key not in real:
-            raise StudyError(f"{where} is not a real FMU parameter nor {CLEARANCE!r}")
-        if not (isinstance(rng, list) and len(rng) == 2 and all(_finite(v) for v in rng)):
-            raise StudyError(f"{where} = {rng!r} must be a range [low, high] of two numbers")
-        lo, hi = float(rng[0]), float(rng[1])
-        if not lo < hi:
-            raise StudyError(f"{where} = {rng!r}: low must be < high")
-        if key in (CLEARANCE, "contact.R1"):
-            if lo <= 0:
-                raise StudyError(f"{where} = {rng!r}: the range must be > 0")
-        out[key] = (lo, hi)
+            raise StudyError(f"variables.{key!r} is not a real FMU parameter nor {CLEARANCE!r}")
+        out[key] = _range(f"variables.{key!r}", rng, key in (CLEARANCE, "contact.R1"))
     if CLEARANCE in out and "contact.R1" in out:
         raise StudyError(f"variables: give either {CLEARANCE!r} or 'contact.R1', not both")
     return out
@@ -226,7 +232,7 @@ def _objectives(table: Any) -> tuple[tuple[str, ...], str, float]:
         if n not in OBJECTIVES:
             raise StudyError(f"objectives.names: {n!r} is not one of {', '.join(OBJECTIVES)}")
     search = t.get("search", names[0])
-    if search not in names:
+    if not isinstance(search, str) or search not in names:
         raise StudyError(f"objectives.search = {search!r} is not in objectives.names")
     moment = t.get("parasitic_moment", 0.0)
     if not _finite(moment) or ("parasitic" in names and not moment > 0):
