@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ...errors import InstallError
 from ...model.instance import nominal_values
 from ...model.scene import Scene
 from ..sweep.parameters import PARAMETERS
@@ -34,8 +35,21 @@ def problem(names: Sequence[str], ranges: Sequence[tuple[float, float]]) -> dict
     }
 
 
+def _salib() -> Any:
+    """SALib, or InstallError saying how to install it (the extra "design")."""
+    try:
+        import SALib
+    except ImportError:
+        raise InstallError(
+            "the Sobol indices of csfh design need SALib: pip install 'csfh[design]' (or set "
+            "[sensitivity] samples = 0 in the study)"
+        ) from None
+    return SALib
+
+
 def saltelli(prob: dict[str, Any], n: int, seed: int) -> np.ndarray:
     """SALib's Sobol-sequence (Saltelli) sample of N (D + 2) points."""
+    _salib()
     from SALib.sample import sobol as sobol_sample
 
     return np.asarray(sobol_sample.sample(prob, n, calc_second_order=False, seed=seed))
