@@ -12,8 +12,8 @@
 #
 # Usage: tools/setup.sh [--extras LIST] [--venv DIR]
 #   --extras LIST  optional parts, comma-separated: test (pytest, ruff, mypy, lizard), dask
-#                  (sweeps on a Dask cluster), cosim (the libcosimpy engine), docs (Sphinx), design (SALib), or
-#                  all (default: none)
+#                  (sweeps on a Dask cluster), cosim (the libcosimpy engine), docs (Sphinx),
+#                  design (SALib, the Sobol indices of csfh design), or all (default: none)
 #   --venv DIR     the virtual environment (default: $CSFH_VENV, else .venv); an existing one is
 #                  used as it is
 # Environment: CSFH_PYTHON, the interpreter that creates the environment (default: the first of
