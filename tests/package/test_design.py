@@ -112,6 +112,16 @@ def test_the_cli_reports_a_bad_study_on_one_line(
     assert "no built-in design study" in capsys.readouterr().err
 
 
+def test_a_range_the_model_refuses_is_one_line_before_any_run(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text(STUDY.replace("[10e-6, 30e-6]", "[10e-6, 300e-6]"))
+    with pytest.raises(StudyError) as exc:
+        run.design("mems", bad, out=tmp_path / "o", workers=1)
+    text = str(exc.value)
+    assert "variables.'contact.R2 - contact.R1' = 0.0003 is refused" in text, text
+    assert "contact.R1" in text and not (tmp_path / "o" / "tasks.jsonl").exists()
+
+
 def test_the_built_in_studies_load_with_their_quick_values() -> None:
     for name in ("mems", "csfh"):
         study = load_study(load_scene(name))

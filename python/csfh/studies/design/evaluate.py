@@ -14,19 +14,20 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from ...batch.store import ResultStore
 from ...batch.tasks import Task
+from ...errors import ParameterError
 from ...model.instance import core_model, nominal_values
 from ...model.scene import Scene
 from ..execution import Execution, counts, execute
 from ..shock import STEP_FACTOR
 from ..shock import study as shock
-from .spec import CLEARANCE, DesignStudy
+from .spec import CLEARANCE, DesignStudy, StudyError
 
 
 def shock_spec(study: DesignStudy, scene: Scene) -> shock.ShockSpec:
@@ -95,6 +96,36 @@ class Evaluator:
         self.spec = shock_spec(self.study, self.scene)
         self.r2 = nominal_values(self.spec.scene, ["contact.R2"])["contact.R2"]
         self.allowables = shock.allowables(self.spec.scene)
+        self.check_ranges()
+
+    def check_ranges(self) -> None:
+        """Each variable at both ends of its range (the others at the scene's values) set up in
+        the C core with the scene's start, so that a range the model refuses (R1 >= R2, a start
+        deeper in the bore than contact.max_initial_indentation, ...) is one line before
+        anything runs."""
+        for name, rng in self.study.variables.items():
+            one = replace(self.study, variables={name: rng})
+            for value in rng:
+                why = self._refused(parameters_of(one, self.r2, [value]))
+                if why:
+                    raise StudyError(
+                        f"{self.study.source}: variables.{name!r} = {value!r} is refused by "
+                        f"the model: {why}"
+                    )
+
+    def _refused(self, values: dict[str, float]) -> str:
+        try:
+            model = core_model(self.spec.scene, values)
+        except ParameterError as exc:
+            return str(exc)
+        depth = -model.get("contact.gap")
+        limit = model.get("contact.max_initial_indentation")
+        if depth > limit:
+            return (
+                f"the start initial.q = {list(self.spec.scene.q0)} is {depth:.6g} m deep in "
+                f"the bore (> contact.max_initial_indentation = {limit:g} m)"
+            )
+        return ""
 
     def tasks(self, sets: Sequence[dict[str, float]], directions: Sequence[float]) -> list[Task]:
         """One task per parameter set (a design's overrides) and direction."""

@@ -21,16 +21,14 @@ LABELS = {
 }
 
 
-def variable_label(name: str) -> tuple[str, float]:
-    """A variable's axis label and scale (lengths in µm or mm by their size is left to the
-    caller's values: SI lengths are shown in µm below 1 mm)."""
-    if name == CLEARANCE:
-        return "clearance R2 − R1", 1.0
-    return name, 1.0
+def variable_label(name: str) -> str:
+    """A variable's name on an axis."""
+    return "clearance R2 − R1" if name == CLEARANCE else name
 
 
 def _scaled(name: str, values: np.ndarray) -> tuple[np.ndarray, str]:
-    label, _ = variable_label(name)
+    """Lengths in µm (below 1 mm) or mm, other values as they are."""
+    label = variable_label(name)
     if name == CLEARANCE or (name.endswith((".h", ".b", ".rho", ".R1", ".R2", ".L"))):
         big = float(np.max(np.abs(values)))
         if big < 1e-3:
@@ -94,10 +92,12 @@ def plot_pareto(path: Path, study: DesignStudy, result: dict[str, Any]) -> Path:
         ax.set_xlabel(f"{lx} [{ux}]")
         ax.set_ylabel(f"{ly}" + (f" [{uy}]" if uy else ""))
         ax.grid(alpha=0.3)
-    axes[0][0].legend(fontsize=7)
+    if ok:
+        axes[0][0].legend(fontsize=7)
     fig.suptitle(
         f"Feasible designs and their Pareto front over {', '.join(names)} (all minimised; "
-        "★ the best by the search objective)",
+        "★ the best by the search objective)\nthe front is over every objective at once: in "
+        "a projection onto two of them it need not be the lower-left edge",
         fontsize=9,
     )
     fig.tight_layout()
@@ -114,7 +114,7 @@ def plot_sensitivity(path: Path, study: DesignStudy, sens: dict[str, Any]) -> Pa
     )
     for i, key in enumerate(sets):
         s = sens[key]
-        inputs = [variable_label(n)[0] for n in s["inputs"]]
+        inputs = [variable_label(n) for n in s["inputs"]]
         pos = np.arange(len(inputs))
         for j, obj in enumerate(names):
             ax = axes[i][j]

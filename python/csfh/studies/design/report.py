@@ -19,8 +19,9 @@ MPA = 1e-6
 
 
 def _compact(d: dict[str, Any]) -> dict[str, Any]:
-    """A design without its per-direction rows."""
-    return {k: v for k, v in d.items() if k != "directions"}
+    """A design without its per-direction rows and parameter overrides (the best designs have
+    them)."""
+    return {k: v for k, v in d.items() if k not in ("directions", "parameters")}
 
 
 def json_data(
