@@ -86,6 +86,12 @@ def study_file(designed: Path) -> Path:
         ({"constraints": {"flexure_margin": 1.5}}, "constraints.flexure_margin = 1.5"),
         ({"sampling": {"method": "grid"}}, "sampling.method = 'grid'"),
         ({"searching": {}}, "unknown key 'searching'"),
+        ({"sensitivity": {"samples": 48}}, "sensitivity.samples = 48 must be 0 or a power of 2"),
+        ({"quick": {"generations": 0}}, "quick.generations = 0 must be an integer >= 1"),
+        (
+            {"variables": {"contact.R2 - contact.R1": [1e-5, 2e-5], "contact.R2": [1.0, 2.0]}},
+            "give either 'contact.R2 - contact.R1' or 'contact.R2', not both",
+        ),
     ],
 )
 def test_a_bad_study_is_one_line_naming_the_key(change: dict[str, Any], message: str) -> None:

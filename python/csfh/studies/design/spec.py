@@ -155,6 +155,15 @@ def _range(where: str, rng: Any, positive: bool) -> tuple[float, float]:
     return lo, hi
 
 
+def _power_of_two(where: str, value: Any) -> int:
+    """0 or a power of 2 (the Sobol sequence of the Saltelli sample keeps its balance only for
+    those)."""
+    n = _int(where, value, 0)
+    if n & (n - 1):
+        raise StudyError(f"{where} = {n} must be 0 or a power of 2")
+    return n
+
+
 def _variables(table: Any) -> dict[str, tuple[float, float]]:
     table = _table("[variables]", table)
     if not table:
@@ -169,8 +178,9 @@ def _variables(table: Any) -> dict[str, tuple[float, float]]:
         if key != CLEARANCE and key not in real:
             raise StudyError(f"variables.{key!r} is not a real FMU parameter nor {CLEARANCE!r}")
         out[key] = _range(f"variables.{key!r}", rng, key in (CLEARANCE, "contact.R1"))
-    if CLEARANCE in out and "contact.R1" in out:
-        raise StudyError(f"variables: give either {CLEARANCE!r} or 'contact.R1', not both")
+    for other in ("contact.R1", "contact.R2"):
+        if CLEARANCE in out and other in out:
+            raise StudyError(f"variables: give either {CLEARANCE!r} or {other!r}, not both")
     return out
 
 
@@ -258,12 +268,16 @@ def _options(data: dict[str, Any]) -> dict[str, Any]:
         "generations": _int("search.generations", search.get("generations", 10), 0),
         "population": _int("search.population", search.get("population", 8), 1),
         "best": _int("search.best", search.get("best", 3), 1),
-        "sensitivity_samples": _int("sensitivity.samples", sens.get("samples", 64), 0),
+        "sensitivity_samples": _power_of_two("sensitivity.samples", sens.get("samples", 64)),
         "paper_parameters": paper,
-        "quick": tuple(
-            sorted((k, _int(f"quick.{k}", v, 0 if "sens" in k else 1)) for k, v in quick.items())
-        ),
+        "quick": tuple(sorted((k, _quick(k, v)) for k, v in quick.items())),
     }
+
+
+def _quick(key: str, value: Any) -> int:
+    if key == "sensitivity_samples":
+        return _power_of_two(f"quick.{key}", value)
+    return _int(f"quick.{key}", value, 1)
 
 
 def study_from_dict(data: dict[str, Any], source: str = "<dict>") -> DesignStudy:
