@@ -162,6 +162,18 @@ def test_sobol_wiring_gives_the_ishigami_indices() -> None:
         assert got["S1_conf"][i] < 0.1 and got["ST_conf"][i] < 0.1
 
 
+def test_the_static_equilibrium_solves_a_nonlinear_spring() -> None:
+    k = np.array([[3.0, 1.0, 0.0], [1.0, 2.0, 0.5], [0.0, 0.5, 1.0]])
+    target = np.array([1e-5, -2e-5, 0.03])
+
+    def forces(q: np.ndarray) -> np.ndarray:
+        d = q - target
+        return -(k @ d) - 50.0 * d**3
+
+    q = evaluate.equilibrium(forces, np.zeros(3), np.array([1e-4, 1e-4, 1.0]))
+    assert np.allclose(q, target, rtol=1e-10, atol=0)
+
+
 def test_the_parasitic_motion_grows_with_the_load_and_falls_with_thickness() -> None:
     scene = load_scene("mems")
     small = evaluate.parasitic(scene, {}, 1e-9)

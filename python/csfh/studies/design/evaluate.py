@@ -13,7 +13,7 @@ this process: it is deterministic wherever the shock runs are computed."""
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -21,7 +21,7 @@ import numpy as np
 
 from ...batch.store import ResultStore
 from ...batch.tasks import Task
-from ...errors import ParameterError
+from ...errors import ParameterError, SimulationError
 from ...model.instance import core_model, nominal_values
 from ...model.scene import Scene
 from ..execution import Execution, counts, execute
@@ -56,23 +56,46 @@ def parameters_of(study: DesignStudy, r2: float, x: Sequence[float]) -> dict[str
     return out
 
 
+NEWTON_STEPS = 30
+"""The most Newton steps of a static equilibrium (it converges in a few: the elastic force is
+smooth and nearly linear in the small displacements of a nominal load)."""
+
+
+def equilibrium(
+    forces: Callable[[np.ndarray], np.ndarray], q: np.ndarray, scale: np.ndarray
+) -> np.ndarray:
+    """The q where forces(q) = 0, by Newton's method from q with a central-difference Jacobian
+    (steps 1e-7 scale), until a step is below 1e-13 scale in every coordinate."""
+    q = np.array(q, dtype=float)
+    h = 1e-7 * scale
+    for _ in range(NEWTON_STEPS):
+        jac = np.empty((3, 3))
+        for j in range(3):
+            e = np.zeros(3)
+            e[j] = h[j]
+            jac[:, j] = (forces(q + e) - forces(q - e)) / (2 * h[j])
+        dq = np.linalg.solve(jac, -forces(q))
+        q += dq
+        if np.all(np.abs(dq) <= 1e-13 * scale):
+            return q
+    raise SimulationError(f"no static equilibrium found from q = {q.tolist()}")
+
+
 def parasitic(scene: Scene, values: dict[str, Any], moment: float) -> dict[str, float]:
     """The static displacement of G1 caused by the moment `moment` about it: the equilibria
-    Q(q) + [0, 0, M] = 0 with M = moment and M = 0 (Newton's method on the C core's smooth
-    forces, a central-difference Jacobian), the distance between their centres and the
+    Q(q) + [0, 0, M] = 0 with M = moment and M = 0 (the C core's smooth forces: the flexure's
+    elastic force, gravity and the scene's inputs), the distance between their centres and the
     rotation."""
-    from scipy.optimize import root
-
     model = core_model(scene, values)
-
-    def residual(q: np.ndarray, m: float) -> np.ndarray:
-        return np.asarray(model.smooth_forces(q)) + np.array([0.0, 0.0, m])
-
+    length = model.get("contact.R2")
+    scale = np.array([length, length, 1.0])
     q0 = np.array(scene.q0, dtype=float)
-    ends = []
-    for m in (0.0, moment):
-        sol = root(residual, q0, args=(m,), method="hybr", options={"xtol": 1e-13})
-        ends.append(np.asarray(sol.x))
+
+    def loaded(m: float) -> Callable[[np.ndarray], np.ndarray]:
+        load = np.array([0.0, 0.0, m])
+        return lambda q: np.asarray(model.smooth_forces(q)) + load
+
+    ends = [equilibrium(loaded(m), q0, scale) for m in (0.0, moment)]
     d = ends[1] - ends[0]
     return {"parasitic": float(math.hypot(d[0], d[1])), "rotation": float(d[2])}
 
