@@ -86,6 +86,7 @@ def study_file(designed: Path) -> Path:
         ({"constraints": {"flexure_margin": 1.5}}, "constraints.flexure_margin = 1.5"),
         ({"sampling": {"method": "grid"}}, "sampling.method = 'grid'"),
         ({"searching": {}}, "unknown key 'searching'"),
+        ({"report": {"axes": ["flexure.h", "flexure.b"]}}, "'flexure.b' is not a design variable"),
         ({"sensitivity": {"samples": 48}}, "sensitivity.samples = 48 must be 0 or a power of 2"),
         ({"quick": {"generations": 0}}, "quick.generations = 0 must be an integer >= 1"),
         (

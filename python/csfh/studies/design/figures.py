@@ -41,7 +41,7 @@ def plot_region(path: Path, study: DesignStudy, result: dict[str, Any]) -> Path:
     """Every evaluated design over the first two variables: feasible, infeasible, the feasible
     Pareto front and the best designs."""
     designs = result["designs"]
-    names = study.names[:2] if len(study.names) > 1 else (study.names[0], study.names[0])
+    names = study.region_axes
     xy = np.array([[d["variables"][n] for n in names] for d in designs])
     x, xl = _scaled(names[0], xy[:, 0])
     y, yl = _scaled(names[1], xy[:, 1])

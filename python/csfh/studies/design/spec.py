@@ -31,9 +31,12 @@ read, with one line naming the key and its value.
     population = 8               # population size = population x number of variables
     best = 3                     # the best designs written as scene files
 
-    [sensitivity]                # Sobol indices (SALib), base samples N: N (2 D + 2) runs
-    samples = 64
-    paper_parameters = true      # also over the paper's Table 4-5 parameters (nominal +- step)
+    [sensitivity]                # Sobol indices (SALib), N base samples: N (D + 2) runs
+    samples = 64                 # 0 or a power of 2
+    paper_parameters = true      # also over the paper's Table 4 parameters (+-10 % of nominal)
+
+    [report]                     # the feasible region's two variables (default: the first two)
+    axes = ["contact.R2 - contact.R1", "flexure.h"]
 
     [quick]                      # what --quick replaces (a run of a minute or two)
     samples = 32
@@ -73,6 +76,7 @@ _TABLES = {
     "search",
     "sensitivity",
     "quick",
+    "report",
 }
 _QUICK = {"samples", "directions", "generations", "population", "sensitivity_samples"}
 
@@ -103,6 +107,13 @@ class DesignStudy:
     paper_parameters: bool = True
     source: str = ""
     quick: tuple[tuple[str, int], ...] = ()
+    axes: tuple[str, ...] = ()
+
+    @property
+    def region_axes(self) -> tuple[str, str]:
+        """The two variables of the feasible region's figure."""
+        names = self.axes or self.names
+        return (names[0], names[1]) if len(names) > 1 else (names[0], names[0])
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -274,6 +285,17 @@ def _options(data: dict[str, Any]) -> dict[str, Any]:
     }
 
 
+def _axes(table: Any, variables: dict[str, Any]) -> tuple[str, ...]:
+    t = _table("[report]", table, {"axes"})
+    axes = t.get("axes", [])
+    if not isinstance(axes, list) or len(axes) not in (0, 2) or len(set(axes)) != len(axes):
+        raise StudyError(f"report.axes = {axes!r} must be two different design variables")
+    for a in axes:
+        if a not in variables:
+            raise StudyError(f"report.axes: {a!r} is not a design variable")
+    return tuple(axes)
+
+
 def _quick(key: str, value: Any) -> int:
     if key == "sensitivity_samples":
         return _power_of_two(f"quick.{key}", value)
@@ -286,8 +308,10 @@ def study_from_dict(data: dict[str, Any], source: str = "<dict>") -> DesignStudy
         _table("study", data, _TABLES)
         pulse, directions, law = _shock(data.get("shock", {}))
         names, search, moment = _objectives(data.get("objectives", {}))
+        variables = _variables(data.get("variables", {}))
         return DesignStudy(
-            variables=_variables(data.get("variables", {})),
+            variables=variables,
+            axes=_axes(data.get("report", {}), variables),
             pulse=pulse,
             directions=directions,
             law=law,
