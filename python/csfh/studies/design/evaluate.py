@@ -192,7 +192,8 @@ class Evaluator:
         report = counts(execute(tasks, self.store, self.how, label))
         for key in self.runs:
             self.runs[key] += report[key]
-        self.executor = report["executor"]
+        if report["computed"] or not self.executor:  # the executor of the computed runs
+            self.executor = report["executor"]
         n = len(dirs)
         return [
             self.measures(values, named, tasks[i * n : (i + 1) * n])
