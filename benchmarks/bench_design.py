@@ -50,6 +50,18 @@ def study_text(designs: int, directions: int) -> str:
     return "\n".join(lines).replace("'", '"') + "\n"
 
 
+def _parasitic_time(designs: list[dict]) -> float:
+    """The static parasitic solve of `designs` again, s per design."""
+    from csfh import load_scene
+    from csfh.studies.design.evaluate import parasitic
+
+    scene = load_scene("mems")
+    t0 = time.perf_counter()
+    for d in designs:
+        parasitic(scene, d["parameters"], 1e-9)
+    return (time.perf_counter() - t0) / len(designs)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--designs", type=int, default=10_000)
@@ -82,6 +94,10 @@ def main() -> None:
     print(f"                                 {runs / wall / workers:8.1f} runs/s/core")
     print(f"  the runs alone     {inside:8.1f} s  {evaluated / inside:8.1f} designs/s/core")
     print(f"                                 {info['computed'] / inside:8.1f} runs/s/core")
+    parasitic = _parasitic_time(result["designs"][:200])
+    print(f"  the parasitic solve {parasitic * 1e3:7.2f} ms per design (in the parent)")
+    share = parasitic * evaluated / (wall * workers)
+    print(f"    {share:.2f} of the study's core time, {inside / (wall * workers):.2f} the runs")
     feasible = sum(d["feasible"] for d in result["designs"])
     print(f"  feasible {feasible} of {len(result['designs'])}, front {len(result['front'])}")
 
