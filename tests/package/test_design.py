@@ -163,6 +163,20 @@ def test_sobol_wiring_gives_the_ishigami_indices() -> None:
         assert got["S1_conf"][i] < 0.1 and got["ST_conf"][i] < 0.1
 
 
+def test_the_agreement_with_table4_is_a_rank_correlation() -> None:
+    inputs = ["R1", "m1", "beta", "h"]  # mean Table 4 levels 2.4, 1, 2.6, 2
+    st = {"same": [0.3, 0.0, 0.4, 0.2], "reversed": [0.1, 0.4, 0.0, 0.2]}
+    zero = [0.0] * 4
+    indices = {
+        k: {"S1": zero, "S1_conf": zero, "ST": v, "ST_conf": zero, "constant": False}
+        for k, v in st.items()
+    }
+    indices["flat"] = {"S1": zero, "S1_conf": zero, "ST": zero, "ST_conf": zero, "constant": True}
+    rho = sensitivity.table4_agreement({"inputs": inputs, "indices": indices})
+    assert rho["same"] == pytest.approx(1.0) and rho["reversed"] == pytest.approx(-1.0)
+    assert rho["flat"] is None
+
+
 def test_the_static_equilibrium_solves_a_nonlinear_spring() -> None:
     k = np.array([[3.0, 1.0, 0.0], [1.0, 2.0, 0.5], [0.0, 0.5, 1.0]])
     target = np.array([1e-5, -2e-5, 0.03])

@@ -140,6 +140,16 @@ def _ranking_lines(study: DesignStudy, s: dict[str, Any]) -> list[str]:
         key = s["inputs"][i]
         levels = ALL_PARAMETERS[key].table4 or ()
         lines.append(f"| {rank} | {key} | {st[i]:.3f} | {' '.join(arrows[v] for v in levels)} |")
+    rho = s["table4_spearman"]
+    text = ", ".join(
+        f"{k} {'—' if v is None else f'{v:+.2f}'}" for k, v in rho.items() if k in study.objectives
+    )
+    lines += [
+        "",
+        "Spearman's rank correlation between the total indices and the mean Table 4 level of "
+        f"each parameter (+1: the same order): {text}. The table ranks the parameters by how "
+        "soon they change the trajectory; the indices, by how much they move each objective.",
+    ]
     return [*lines, ""]
 
 

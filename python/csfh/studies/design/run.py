@@ -137,7 +137,9 @@ def _sensitivity(study: DesignStudy, ev: Evaluator, direction: float) -> dict[st
             named = [dict(zip(keys, map(float, row), strict=True)) for row in x]
             return outputs(ev.evaluate_sets(sets, named, "paper sensitivity", [direction]))
 
-        out["paper"] = sensitivity.sobol_indices(keys, ranges, paper, n, study.seed)
+        indices = sensitivity.sobol_indices(keys, ranges, paper, n, study.seed)
+        indices["table4_spearman"] = sensitivity.table4_agreement(indices)
+        out["paper"] = indices
     return out
 
 

@@ -10,6 +10,7 @@ scene's worst (`analyse` is given the evaluation)."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -18,7 +19,7 @@ import numpy as np
 from ...errors import InstallError
 from ...model.instance import nominal_values
 from ...model.scene import Scene
-from ..sweep.parameters import PARAMETERS
+from ..sweep.parameters import ALL_PARAMETERS, PARAMETERS
 
 CONFIDENCE = 0.95
 RESAMPLES = 200
@@ -118,3 +119,20 @@ def paper_inputs(scene: Scene) -> tuple[list[str], list[tuple[float, float]], Ca
         return out
 
     return [p.key for p in rows], ranges, overrides
+
+
+def table4_agreement(s: dict[str, Any]) -> dict[str, float | None]:
+    """Per output, Spearman's rank correlation between the paper parameters' total indices and
+    their mean level in the paper's Table 4 (the arrows the sweep measures; None: an output or
+    a ranking that does not vary)."""
+    from scipy.stats import spearmanr
+
+    levels = [float(np.mean(ALL_PARAMETERS[k].table4 or (0,))) for k in s["inputs"]]
+    out: dict[str, float | None] = {}
+    for name, r in s["indices"].items():
+        if r["constant"] or not np.ptp(r["ST"]) > 0:
+            out[name] = None
+            continue
+        rho = float(spearmanr(r["ST"], levels).statistic)
+        out[name] = None if math.isnan(rho) else rho
+    return out
