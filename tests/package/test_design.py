@@ -136,6 +136,39 @@ def test_the_built_in_studies_load_with_their_quick_values() -> None:
         assert quick.samples < study.samples and len(quick.directions) < len(study.directions)
 
 
+def test_quick_replaces_only_what_its_table_names() -> None:
+    import tomllib
+
+    data = tomllib.loads(STUDY)
+    assert study_from_dict(data).quick_study().directions == (90.0, 270.0)
+    data["quick"] = {"directions": 3, "samples": 2}
+    quick = study_from_dict(data).quick_study()
+    assert quick.directions == (0.0, 120.0, 240.0) and quick.samples == 2
+    assert quick.generations == 1 and quick.sensitivity_samples == 0
+
+
+def test_the_sensitivity_runs_through_the_study(tmp_path: Path) -> None:
+    text = STUDY.replace("directions = [90.0, 270.0]", "directions = [90.0]")
+    text = text.replace("[sensitivity]\nsamples = 0", "[sensitivity]\nsamples = 2")
+    (tmp_path / "s.toml").write_text(text)
+    outcome = run.design("mems", tmp_path / "s.toml", out=tmp_path / "o", workers=1)
+    sens = outcome.result["sensitivity"]
+    assert sens["direction"] == 90.0
+    assert sens["design"]["evaluations"] == 2 * (2 + 2)
+    assert sens["paper"]["evaluations"] == 2 * (len(sens["paper"]["inputs"]) + 2)
+    for part in ("design", "paper"):
+        for name in ("flexure_stress", "contacts", "parasitic"):
+            r = sens[part]["indices"][name]
+            assert len(r["ST"]) == len(sens[part]["inputs"]), (part, name)
+    data = json.loads((tmp_path / "o" / "design.json").read_text())
+    assert set(data["sensitivity"]["paper"]["table4_spearman"]) == {
+        "flexure_stress",
+        "contacts",
+        "parasitic",
+    }
+    assert (tmp_path / "o" / "design_sensitivity.png").is_file()
+
+
 def test_pareto_keeps_the_non_dominated_rows() -> None:
     values = np.array([[1, 5], [2, 2], [3, 3], [5, 1], [2, 2], [1, 6]], dtype=float)
     assert search.pareto(values).tolist() == [0, 1, 3]

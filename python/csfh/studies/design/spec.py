@@ -124,7 +124,7 @@ class DesignStudy:
         q = dict(self.quick)
         return replace(
             self,
-            directions=_directions(q.get("directions", len(self.directions))),
+            directions=_directions(q["directions"]) if "directions" in q else self.directions,
             sensitivity_samples=q.get("sensitivity_samples", self.sensitivity_samples),
             samples=q.get("samples", self.samples),
             generations=q.get("generations", self.generations),
