@@ -161,8 +161,8 @@ def _summary(
 
 
 def _settling(out: dict[str, Any], s: dict[str, Any]) -> dict[str, Any]:
-    """A batched co-simulation run's last contact: when it ended (None: no contact) and whether
-    a contact is still on at the end (0 or 1)."""
+    """A run's last contact, where its summary has it: when the last contact that ended did
+    (None: none ended) and whether a contact is still on at the end (0 or 1)."""
     if "last_release_time" in s:
         last = s["last_release_time"]
         out["last_release"] = None if last is None else float(last)

@@ -207,8 +207,9 @@ class CsBatchResult:
         }
 
     def _last_release(self, i: int) -> float | None:
-        """When the last contact of run i ended (None: no contact)."""
-        if int(self.value(i, "contact.count")) == 0:
+        """When the last contact of run i that ended did (None: none ended)."""
+        count = int(self.value(i, "contact.count"))
+        if count == 0 or (count == 1 and self.value(i, "contact.active") > 0.0):
             return None
         return self.value(i, "contact.release_time")
 
