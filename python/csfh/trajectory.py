@@ -107,7 +107,8 @@ class Trajectory:
         the output table, its peak columns where the run has them (co-simulation: the peaks over
         each communication step) and the per-step records), the largest flexure stress and
         contact pressure where the table has them, and the integrator, its steps,
-        right-hand-side evaluations and wall time. The number of contacts is the FMU's count
+        right-hand-side evaluations and wall time, when the last contact ended (None: none
+        ended) and whether one is still on at the end. The number of contacts is the FMU's count
         where the run reports it (co-simulation: a step can hold several onsets)."""
         F_N = self.table["F_N"]
         F_T = self.table["F_T"]
@@ -142,6 +143,9 @@ class Trajectory:
             )
         for key in ("integrator", "steps", "rhs_evaluations", "wall_time"):
             out[key] = self.stats.get(key)
+        ended = len(self.releases) > 0 and out["contacts"] > 0
+        out["last_release_time"] = float(self.releases[-1]) if ended else None
+        out["contact_at_end"] = int(len(self.contacts) > len(self.releases))
         return out
 
     def write_csv(self, path: Path) -> Path:
