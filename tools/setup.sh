@@ -17,7 +17,8 @@
 # Usage: tools/setup.sh [--extras LIST] [--platforms host|all] [--venv DIR]
 #   --extras LIST       optional parts, comma-separated: test (pytest, ruff, mypy, lizard), dask
 #                       (sweeps on a Dask cluster), cosim (the libcosimpy engine), docs (Sphinx),
-#                       or all (default: none); adding one installs only its requirements
+#                       design (SALib, the Sobol indices of csfh design), or all (default:
+#                       none); adding one installs only its requirements
 #   --platforms P       host: the FMUs carry this machine's linux64 binary (the fastest set-up);
 #                       all: also win64, darwin64 and glibc-2.17 linux64 (default: what build/
 #                       was last configured with, else host)
@@ -45,7 +46,7 @@ while [ $# -gt 0 ]; do
     *) echo "setup: unknown option $1 (tools/setup.sh --help)" >&2; exit 2 ;;
   esac
 done
-[ "$extras" = "all" ] && extras="test,dask,cosim,docs"
+[ "$extras" = "all" ] && extras="test,dask,cosim,docs,design"
 if [ -z "$platforms" ]; then  # what build/ has, so a plain re-run keeps every platform
   platforms="$(sed -n 's/^CSFH_PLATFORMS:STRING=//p' build/CMakeCache.txt 2>/dev/null || true)"
   [ "$platforms" = all ] || platforms=host
@@ -56,8 +57,8 @@ case "$platforms" in
 esac
 for extra in ${extras//,/ }; do
   case "$extra" in
-    test|dask|cosim|docs) ;;
-    *) echo "setup: --extras: unknown extra '$extra' (test, dask, cosim, docs, all)" >&2; exit 2 ;;
+    test|dask|cosim|docs|design) ;;
+    *) echo "setup: --extras: unknown extra '$extra' (test, dask, cosim, docs, design, all)" >&2; exit 2 ;;
   esac
 done
 
