@@ -51,6 +51,7 @@ CSFH_SOURCES = {
     "csfh_normal_law.c",
     "csfh_friction.c",
     "csfh_model.c",
+    "csfh_jacobian.c",
     "csfh_vartable.c",
     "csfh_variables.c",
     "csfh_sundials_alloc.c",  # SUNDIALS allocates through it (sundials/csfh_sundials_alloc.h)
