@@ -32,6 +32,7 @@ CSFH_SOURCES = {
     "fmu_values.c",
     "fmu_state.c",
     "fmu_me.c",
+    "fmu_derivatives.c",
     "fmu_step.c",
     "cosimulation.c",
     "integration.c",
