@@ -1139,8 +1139,8 @@ static void do_rare(instance_t *in)
                                              fmu_model.jac_unknowns[below(fmu_model.n_jac_unknowns)]};
             const fmi2ValueReference k = fmu_model.jac_knowns[below(fmu_model.n_jac_knowns)];
             const double seed = 1.0;
-            c = begin(in, MAY_REJECT, PURE);
-            note("fmi2GetDirectionalDerivative");
+            c = begin(in, may(legal(in, GET_OK)), EVALUATES);
+            note("fmi2GetDirectionalDerivative in %s", mstate_name[in->state]);
             st = fmi2GetDirectionalDerivative(in->c, u, 2, &k, 1, &seed, d);
             end(&c, "fmi2GetDirectionalDerivative", st);
             if (st <= fmi2Warning) {
