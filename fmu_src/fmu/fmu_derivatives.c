@@ -140,5 +140,13 @@ fmu_status_t fmu_partial_derivatives(fmu_instance_t *inst, const char *function,
             }
         }
     }
+    const size_t n_out = a->adjoint ? a->n_knowns : a->n_unknowns;
+    for (size_t k = 0; k < n_out; k++) {
+        if (!isfinite(a->sensitivity[k])) { /* finite J, a seed too large for it */
+            FMU_LOG_ERROR(inst, "%s: sensitivity[%zu] = %g is not finite", function, k,
+                          a->sensitivity[k]);
+            return FMU_ERROR;
+        }
+    }
     return FMU_OK;
 }
