@@ -128,7 +128,10 @@ fmu_status_t fmu_partial_derivatives(fmu_instance_t *inst, const char *function,
         return status;
     }
     const int nu = fmu_model.n_jac_unknowns, nk = fmu_model.n_jac_knowns;
-    memset(a->sensitivity, 0, (a->adjoint ? a->n_knowns : a->n_unknowns) * sizeof(double));
+    const size_t n_out = a->adjoint ? a->n_knowns : a->n_unknowns;
+    if (n_out > 0) {
+        memset(a->sensitivity, 0, n_out * sizeof(double));
+    }
     for (size_t i = 0; i < a->n_unknowns; i++) {
         const int row = position(fmu_model.jac_unknowns, nu, a->unknowns[i]);
         for (size_t j = 0; j < a->n_knowns; j++) {
@@ -140,7 +143,6 @@ fmu_status_t fmu_partial_derivatives(fmu_instance_t *inst, const char *function,
             }
         }
     }
-    const size_t n_out = a->adjoint ? a->n_knowns : a->n_unknowns;
     for (size_t k = 0; k < n_out; k++) {
         if (!isfinite(a->sensitivity[k])) { /* finite J, a seed too large for it */
             FMU_LOG_ERROR(inst, "%s: sensitivity[%zu] = %g is not finite", function, k,
