@@ -15,12 +15,16 @@ import fmpy
 import pytest
 from csfh_command import run_csfh
 
+import csfh
 from csfh import paths
 from csfh.errors import InstallError
 from csfh.model import installation
 from csfh.scenes import BUILTIN_SCENES, TOLERANCE_PREFIX
 
 ROOT = Path(__file__).resolve().parents[2]
+# the folder of the csfh this process imported (the installed package, or python/ of the checkout
+# when PYTHONPATH names it), so that `python -m csfh` runs the same package as the test
+PACKAGE_PARENT = str(Path(csfh.__file__).resolve().parents[1])
 VARIABLES = ("CSFH_FMU", "CSFH_FMU3", "CSFH_COMBDRIVE_FMU", "CSFH_CORE", "CSFH_BATCH")
 
 
@@ -30,7 +34,7 @@ def clean_env(**extra: str) -> dict[str, str]:
 
 
 def test_info_lists_every_artefact_its_platforms_and_the_scenes() -> None:
-    proc = run_csfh("info", env=clean_env(PYTHONPATH=str(ROOT / "python")))
+    proc = run_csfh("info", env=clean_env(PYTHONPATH=PACKAGE_PARENT))
     assert proc.returncode == 0, proc.stderr
     out = proc.stdout
     found = installation.artefacts()
@@ -77,7 +81,7 @@ def test_a_variable_that_names_no_file_is_an_error_naming_it(
 
 
 def test_info_and_a_run_with_a_bad_variable() -> None:
-    env = clean_env(PYTHONPATH=str(ROOT / "python"), CSFH_FMU="/nonexistent")
+    env = clean_env(PYTHONPATH=PACKAGE_PARENT, CSFH_FMU="/nonexistent")
     proc = run_csfh("info", env=env)
     assert proc.returncode == 0 and "$CSFH_FMU = '/nonexistent': no such file" in proc.stdout
     proc = run_csfh("run", "central", "--law", "LN_spheres", "--quiet", env=env, cwd=Path("/tmp"))

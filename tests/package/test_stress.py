@@ -76,8 +76,10 @@ def test_the_impact_cases_horizons_are_the_hertz_oracles() -> None:
             )
             stop = 3 * tc + 3 * hertz_max_indentation(K, v) / (max(e_min, 1e-3) * v)
             assert case.t_contact == tc
-        assert case.scene.stop_time == stop, case.name
-        assert case.scene.integrator.output_interval == stop / 400, case.name
+        # the restitution horizon comes from an integration to rtol 1e-6 (scipy's Radau), whose
+        # last digits may move with scipy's version
+        assert case.scene.stop_time == pytest.approx(stop, rel=1e-12), case.name
+        assert case.scene.integrator.output_interval == pytest.approx(stop / 400, rel=1e-12)
         checked += 1
     assert checked == 21
 

@@ -1,5 +1,6 @@
 """The package's layout: no import cycles, and every import goes down the layers (cli -> studies
--> batch / cosim -> runners -> model -> foundation), as the package docstring describes; and no two test modules share a name.
+-> batch / cosim -> runners -> model -> foundation), as the package docstring describes; and no
+two test modules share a name.
 
 The import graph is read from the source (ast), counting every import: at module level, inside
 functions (lazy imports) and under `if TYPE_CHECKING:`."""
