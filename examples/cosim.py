@@ -114,8 +114,10 @@ def main() -> None:
     r = master(hinge_fmu, actuator_fmu)
     hold = r["F_y"][0]
     print(f"actuator force at 333 V: {hold:.2f} N (body 1 weighs {10 * 9.81:.1f} N)")
-    print(f"contacts by {STOP} s: {int(r['count'][-1])}, largest F_N {r['F_N'].max():.4g} N, "
-          f"largest eccentricity {np.hypot(r['x'], r['y']).max() * 1e3:.3f} mm (clearance 20 mm)")
+    print(
+        f"contacts by {STOP} s: {int(r['count'][-1])}, largest F_N {r['F_N'].max():.4g} N, "
+        f"largest eccentricity {np.hypot(r['x'], r['y']).max() * 1e3:.3f} mm (clearance 20 mm)"
+    )
     assert abs(hold - 98.1) < 1.0 and r["count"][-1] >= 1
 
     # the same coupling run by the harness (fmpy engine, Gauss-Seidel ordering)

@@ -37,7 +37,8 @@ def main() -> None:
         s = run.summary()
         print(
             f"  {run.model:<13} first contact {s['first_contact_time']:.6f} s "
-            f"(exact {t_exact:.6f}), {s['contacts']} contacts, max F_N {s['max_F_N']:.4g} N"
+            f"(exact {t_exact:.6f}), {s['contacts']} contacts, max {run.force_label()} "
+            f"{s['max_F_N']:.4g} N"
         )
         run.write_csv(out / f"{run.model}.csv")
         assert abs(s["first_contact_time"] - t_exact) < 2e-5, run.model  # Moreau: within 2 steps
@@ -56,8 +57,10 @@ def main() -> None:
     run = csfh.simulate(mine, "LN_cylinders")
     first = run.contact_records
     rebound = first["release_speed"][0] / first["onset_speed"][0]
-    print(f"  {mine.name}: linear cylinder law (preset consistent), c_r = 0.5 -> rebound ratio "
-          f"{rebound:.3f} (LN cannot reach low restitution: docs/model.md §8)")
+    print(
+        f"  {mine.name}: linear cylinder law (preset consistent), c_r = 0.5 -> rebound ratio "
+        f"{rebound:.3f} (LN cannot reach low restitution: docs/model.md §8)"
+    )
     assert 0.5 < rebound < 1.0
     print(f"CSV files in {out}")
 

@@ -12,8 +12,8 @@
 #
 # Usage: tools/setup.sh [--extras LIST] [--venv DIR]
 #   --extras LIST  optional parts, comma-separated: test (pytest, ruff, mypy, lizard), dask
-#                  (sweeps on a Dask cluster), cosim (the libcosimpy engine), docs (Sphinx), or
-#                  all (default: none)
+#                  (sweeps on a Dask cluster), cosim (the libcosimpy engine), docs (Sphinx),
+#                  design (SALib, the Sobol indices of csfh design), or all (default: none)
 #   --venv DIR     the virtual environment (default: $CSFH_VENV, else .venv); an existing one is
 #                  used as it is
 # Environment: CSFH_PYTHON, the interpreter that creates the environment (default: the first of
@@ -35,11 +35,11 @@ while [ $# -gt 0 ]; do
     *) echo "setup: unknown option $1 (tools/setup.sh --help)" >&2; exit 2 ;;
   esac
 done
-[ "$extras" = "all" ] && extras="test,dask,cosim,docs"
+[ "$extras" = "all" ] && extras="test,dask,cosim,docs,design"
 for extra in ${extras//,/ }; do
   case "$extra" in
-    test|dask|cosim|docs) ;;
-    *) echo "setup: --extras: unknown extra '$extra' (test, dask, cosim, docs, all)" >&2; exit 2 ;;
+    test|dask|cosim|docs|design) ;;
+    *) echo "setup: --extras: unknown extra '$extra' (test, dask, cosim, docs, design, all)" >&2; exit 2 ;;
   esac
 done
 

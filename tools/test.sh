@@ -13,7 +13,7 @@ stage() { printf '\n== %s  (at %dm%02ds)\n' "$1" $((SECONDS / 60)) $((SECONDS % 
 
 venv="${CSFH_VENV:-.venv}"
 stage "setup (tools/setup.sh)"
-tools/setup.sh --venv "$venv" --extras test,dask,cosim,docs
+tools/setup.sh --venv "$venv" --extras test,dask,cosim,docs,design
 # shellcheck disable=SC1091
 . "$venv/bin/activate"
 unset PYTHONPATH  # the tests use the installed package

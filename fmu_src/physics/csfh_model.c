@@ -64,7 +64,12 @@ static int check_derived(const csfh_params_t *p, const csfh_derived_t *d, char *
     const named_value_t from_sbar1[] = {{"flexure.OF[1]", p->OF[0]}, rho, phi, beta, END};
     const named_value_t from_sbar2[] = {{"flexure.OF[2]", p->OF[1]}, rho, phi, beta, END};
     const named_value_t from_E_star[] = {E1, nu1, E2, nu2, END};
+    const named_value_t from_delassus[] = {{"body1.m", p->m1}, {"body1.I", p->I1}, R1, END};
 #undef END
+    /* Moreau's Delassus matrix (docs/model.md Eq. (3.6)) and its determinant, which the exact
+     * solution of §6.2 divides by: an overflow there gives a zero impulse, the body would pass
+     * through the bore */
+    const double G_TT = 1.0 / p->m1 + p->R1 * p->R1 / p->I1;
     const derived_check_t derived[] = {
         {{"contact.delta", d->delta}, from_delta},
         {{"contact.K_spheres", d->K_spheres}, p->K_from_materials ? from_spheres : from_spheres_given},
@@ -77,6 +82,8 @@ static int check_derived(const csfh_params_t *p, const csfh_derived_t *d, char *
         /* not FMU variables: named by what they are */
         {{"the contact modulus E* (Hertz line contact)", d->E_star}, from_E_star},
         {{"the conformal radius R1 R2 / (R2 - R1)", d->R_conformal}, from_delta},
+        {{"the Moreau step's Delassus determinant scale (1/m1 + R1^2/I1)^2", G_TT * G_TT},
+         from_delassus},
     };
     for (size_t i = 0; i < sizeof(derived) / sizeof(derived[0]); i++) {
         if (!isfinite(derived[i].q.value)) {

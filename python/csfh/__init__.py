@@ -17,8 +17,8 @@ The package, by role (each layer imports only the ones below it; tests/tools/tes
 checks it):
 
 * ``csfh.cli``: the command line;
-* ``csfh.studies``: the paper's comparison, accuracy, stress, sweep, tolerance and shock studies,
-  each with its report;
+* ``csfh.studies``: the paper's comparison, accuracy, stress, sweep, tolerance, shock and design
+  studies, each with its report;
 * ``csfh.cosim``: co-simulation of the hinge with the comb-drive actuator;
 * ``csfh.batch``: many runs of one scene (tasks, result store, executors);
 * ``csfh.runners``: one run of one model (the FMU, Moreau, RK4) -> a `Trajectory`, and batches
@@ -51,6 +51,7 @@ if TYPE_CHECKING:
     from .runners.moreau import moreau
     from .runners.simulate import simulate
     from .studies.compare import Comparison, compare
+    from .studies.design.run import design
     from .trajectory import Trajectory
 
 _PUBLIC = {
@@ -70,6 +71,7 @@ _PUBLIC = {
     "core_library_path": "csfh.paths",
     "cosimulate": "csfh.cosim.run",
     "cs_batch": "csfh.runners.cs_batch",
+    "design": "csfh.studies.design.run",
     "fmu_path": "csfh.paths",
     "load_scene": "csfh.model.scene",
     "moreau": "csfh.runners.moreau",
@@ -98,6 +100,7 @@ __all__ = [
     "core_library_path",
     "cosimulate",
     "cs_batch",
+    "design",
     "fmu_path",
     "load_scene",
     "moreau",

@@ -11,13 +11,19 @@ Each is looked for, in this order:
 3. only for a package that is not installed, a source checkout used with
    ``PYTHONPATH=python`` (the tests, the docs build): the checkout's ``build/`` directory. The
    package counts as a checkout's when it is ``python/csfh`` beside the checkout's
-   ``CMakeLists.txt``; an installed package never looks outside its own files."""
+   ``CMakeLists.txt``; an installed package never looks outside its own files.
+
+An FMU found so must be the FMU of its model (a zip archive whose modelDescription.xml names
+the model, csfh or combdrive), else InstallError says what the file is instead."""
 
 from __future__ import annotations
 
 import os
+import zipfile
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
+from xml.etree import ElementTree
 
 from .errors import InstallError, ParameterError
 
@@ -41,6 +47,7 @@ class Artefact:
     relative: str
     variable: str | None = None
     beside: str | None = None
+    model: str | None = None  # an FMU: its modelName
 
     def candidates(self) -> list[tuple[Path, str]]:
         """(path, where it comes from) in the order they are tried."""
@@ -69,6 +76,9 @@ class Artefact:
         candidates = self.candidates()
         for path, origin in candidates:
             if path.is_file():
+                if self.model is not None:
+                    st = path.stat()
+                    _check_fmu(path, origin, self.model, (st.st_size, st.st_mtime_ns))
                 return path, origin
         looked = ", ".join(str(p) for p, _ in candidates)
         raise InstallError(
@@ -77,11 +87,36 @@ class Artefact:
         )
 
 
+@cache
+def _check_fmu(path: Path, origin: str, model: str, version: tuple[int, int]) -> None:
+    """InstallError naming where the file comes from unless it is an FMU of `model` (cached per
+    file version: size and modification time)."""
+    where = f"{origin} = {str(path)!r}" if origin.startswith("$") else f"{path} ({origin})"
+    try:
+        with zipfile.ZipFile(path) as archive:
+            root = ElementTree.fromstring(archive.read("modelDescription.xml"))
+    except zipfile.BadZipFile:
+        raise InstallError(f"{where}: not an FMU (not a zip archive)") from None
+    except KeyError:
+        raise InstallError(f"{where}: not an FMU (no modelDescription.xml)") from None
+    except ElementTree.ParseError as exc:
+        raise InstallError(f"{where}: not an FMU (modelDescription.xml: {exc})") from None
+    except OSError as exc:
+        raise InstallError(f"{where}: cannot be read ({exc.strerror or exc})") from None
+    found = root.get("modelName")
+    if found != model:
+        raise InstallError(
+            f"{where}: the FMU of model {found!r}, not {model}'s FMU (modelName {model!r})"
+        )
+
+
 ARTEFACTS = {
-    "fmu": Artefact("csfh.fmu", "CSFH_FMU"),
-    "fmu3": Artefact("fmi3/csfh.fmu", "CSFH_FMU3"),
-    "combdrive": Artefact("combdrive.fmu", "CSFH_COMBDRIVE_FMU", beside="CSFH_FMU"),
-    "combdrive3": Artefact("fmi3/combdrive.fmu", beside="CSFH_FMU3"),
+    "fmu": Artefact("csfh.fmu", "CSFH_FMU", model="csfh"),
+    "fmu3": Artefact("fmi3/csfh.fmu", "CSFH_FMU3", model="csfh"),
+    "combdrive": Artefact(
+        "combdrive.fmu", "CSFH_COMBDRIVE_FMU", beside="CSFH_FMU", model="combdrive"
+    ),
+    "combdrive3": Artefact("fmi3/combdrive.fmu", beside="CSFH_FMU3", model="combdrive"),
     "core": Artefact("libcsfh_core.so", "CSFH_CORE"),
     "batch": Artefact("libcsfh_batch.so", "CSFH_BATCH"),
 }

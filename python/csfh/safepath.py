@@ -10,6 +10,7 @@ keeps its own files in (``.csfh``, ``signals``, ``claims``) must be real directo
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import stat
@@ -130,6 +131,26 @@ def own_directory(path: Path, create: bool = True) -> Path:
             f"{path}: {kind(st.st_mode)}, not a directory: refused (csfh keeps its own files "
             "only in a real directory of the results folder)"
         )
+    return path
+
+
+def check_output_directory(path: Path) -> Path:
+    """An output directory (``--out``) that can be created or written, checked before a command
+    computes anything (its files are written only at the end): `path` is a directory or missing,
+    and the nearest existing directory above it (or itself) can be written. ResultsError naming
+    `path` and the system's reason otherwise (the words `csfh.output.output_set` uses)."""
+    path = Path(path)
+    existing = path
+    while not os.path.lexists(existing) and existing != existing.parent:
+        existing = existing.parent
+    reason = None
+    if not os.path.isdir(existing):
+        reason = os.strerror(errno.ENOTDIR)
+    elif not os.access(existing, os.W_OK | os.X_OK):
+        read_only = os.statvfs(existing).f_flag & os.ST_RDONLY
+        reason = os.strerror(errno.EROFS if read_only else errno.EACCES)
+    if reason is not None:
+        raise ResultsError(f"{path}: is not a usable output directory ({reason})")
     return path
 
 

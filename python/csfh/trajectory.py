@@ -30,6 +30,18 @@ SIGNALS = ("x", "y", "theta", "F_N", "F_T")
 points; F_N and F_T the value of largest magnitude in each output interval (t_k-1, t_k] (over
 every integrator step the run recorded), so that an impact peak does not depend on where the
 grid happens to cut it."""
+IMPULSIVE_MODELS = frozenset({"Moreau"})
+"""Models whose F_N and F_T are not a contact law's forces but each step's impulse over the step,
+Lambda / h (docs/model.md §6): they scale as 1/h (about 1e6 N at h = 1e-5 s where the laws give
+1e4 N), so they are labelled wherever they are printed or plotted (`force_label`)."""
+
+
+def force_label(model: str, name: str = "F_N") -> str:
+    """The force `name` of `model` as printed beside the laws' forces: Moreau's is marked as an
+    impulse over the step."""
+    return f"{name} (impulse/h)" if model in IMPULSIVE_MODELS else name
+
+
 UNITS = {
     "t": "s",
     "x": "m",
@@ -76,6 +88,11 @@ class Trajectory:
     releases: np.ndarray = field(default_factory=lambda: np.zeros(0))
     contact_records: dict[str, np.ndarray] = field(default_factory=dict)
 
+    def force_label(self, name: str = "F_N") -> str:
+        """The force `name` as printed beside other models' forces (`force_label`): Moreau's
+        says that it is an impulse over the step."""
+        return force_label(self.model, name)
+
     def __getitem__(self, column: str) -> np.ndarray:
         """A column of the output table, e.g. ``run["F_N"]`` (units in ``UNITS``)."""
         return self.table[column]
@@ -90,7 +107,8 @@ class Trajectory:
         the output table, its peak columns where the run has them (co-simulation: the peaks over
         each communication step) and the per-step records), the largest flexure stress and
         contact pressure where the table has them, and the integrator, its steps,
-        right-hand-side evaluations and wall time. The number of contacts is the FMU's count
+        right-hand-side evaluations and wall time, when the last contact ended (None: none
+        ended) and whether one is still on at the end. The number of contacts is the FMU's count
         where the run reports it (co-simulation: a step can hold several onsets)."""
         F_N = self.table["F_N"]
         F_T = self.table["F_T"]
@@ -125,6 +143,9 @@ class Trajectory:
             )
         for key in ("integrator", "steps", "rhs_evaluations", "wall_time"):
             out[key] = self.stats.get(key)
+        ended = len(self.releases) > 0 and out["contacts"] > 0
+        out["last_release_time"] = float(self.releases[-1]) if ended else None
+        out["contact_at_end"] = int(len(self.contacts) > len(self.releases))
         return out
 
     def write_csv(self, path: Path) -> Path:

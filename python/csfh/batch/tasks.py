@@ -34,8 +34,8 @@ from ..model._csfh_variables import DEFAULT_STOP_TIME, OUTPUT_INTERVAL
 from ..model.scene import Scene
 from ..runners.registry import Runner, TrajectoryRuns, runner_for
 
-SCHEMA = 3  # 2: forces of the event-driven runs as interval peaks; 3: co-simulation summaries
-# from the FMU's peak outputs and contact count, stress peaks
+SCHEMA = 4  # 2: forces of the event-driven runs as interval peaks; 3: co-simulation summaries
+# from the FMU's peak outputs and contact count, stress peaks; 4: the last contact's end
 KEY_DIGITS = 24
 """Hexadecimal digits of a task key (`task_key`)."""
 SUMMARY_KEYS = ("first_contact", "contacts", "peak_F_N", "peak_abs_F_T", "steps")
@@ -160,14 +160,25 @@ def _summary(
     return out
 
 
+def _settling(out: dict[str, Any], s: dict[str, Any]) -> dict[str, Any]:
+    """A run's last contact, where its summary has it: when the last contact that ended did
+    (None: none ended) and whether a contact is still on at the end (0 or 1)."""
+    if "last_release_time" in s:
+        last = s["last_release_time"]
+        out["last_release"] = None if last is None else float(last)
+        out["contact_at_end"] = int(s["contact_at_end"])
+    return out
+
+
 def _run_summary(s: dict[str, Any]) -> dict[str, Any]:
     """The task summary of a run summary (Trajectory.summary, CsBatchResult.summary)."""
     stresses = None
     if "max_flexure_stress" in s:
         stresses = (s["max_flexure_stress"], s["max_contact_pressure"])
-    return _summary(
+    out = _summary(
         s["first_contact_time"], s["contacts"], s["max_F_N"], s["max_abs_F_T"], s["steps"], stresses
     )
+    return _settling(out, s)
 
 
 def _run_group(runner: Runner, tasks: Sequence[Task]) -> list[Result]:

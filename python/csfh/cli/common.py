@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import textwrap
 from pathlib import Path
 from typing import Any
@@ -18,6 +19,32 @@ from ..errors import CliError as CliError  # the commands' one-line error
 from ..scenes import BUILTIN_SCENES
 
 SCENE_HELP = f"built-in scene ({', '.join(BUILTIN_SCENES)}) or the path of a .toml scene file"
+
+
+NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.I)
+"""What an argument that starts with '-' must look like to be a value, not an option."""
+
+
+class Parser(argparse.ArgumentParser):
+    """An argument parser that takes every negative number (-1e-3, -.5, -inf) as an option's
+    value, so that the option's own check names it; argparse takes only -5 and -0.5 so, and
+    reports "-1e-3" as a missing value. No option of csfh looks like a number."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER
+
+
+EMPTY_PATH_OPTIONS = ("out", "export_ssp", "notes", "tolerance")
+"""Options that name a file or directory: an empty value is refused, not taken as no value."""
+
+
+def check_paths(args: argparse.Namespace) -> None:
+    """CliError for an empty path (`--out ''` would otherwise mean the default results/...)."""
+    for dest in EMPTY_PATH_OPTIONS:
+        if getattr(args, dest, None) == "":
+            option = "--" + dest.replace("_", "-")
+            raise CliError(f"{option} '': an empty path (give a path, or leave {option} out)")
 
 
 class HelpFormatter(argparse.HelpFormatter):
@@ -59,10 +86,12 @@ def add_quiet(p: argparse.ArgumentParser) -> None:
 
 
 def out_dir(args: argparse.Namespace, *default: str) -> Path:
-    """--out, else results/<default...>."""
+    """--out, else results/<default...>: checked now, before the command computes anything
+    (a directory it cannot write is found before the run, not after)."""
     from ..output import results_dir
+    from ..safepath import check_output_directory
 
-    return results_dir(args.out, *default)
+    return check_output_directory(results_dir(args.out, *default))
 
 
 def positive_int(text: str) -> int:

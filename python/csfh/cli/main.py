@@ -17,17 +17,13 @@ from typing import Any
 
 def build_parser() -> Any:
     """The argument parser (argparse.ArgumentParser) of every command."""
-    import argparse
-
     from .._version import __version__
-    from . import accuracy, common, cosim, run, shock, sweep
+    from . import accuracy, common, cosim, design, run, shock, sweep
 
-    parser = argparse.ArgumentParser(
-        prog="csfh", description=__doc__, formatter_class=common.HelpFormatter
-    )
+    parser = common.Parser(prog="csfh", description=__doc__, formatter_class=common.HelpFormatter)
     parser.add_argument("--version", action="version", version=f"csfh {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for module in (run, accuracy, sweep, shock, cosim):  # each defines its commands
+    for module in (run, accuracy, sweep, shock, design, cosim):  # each defines its commands
         module.register(sub)
     return parser
 
@@ -54,8 +50,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     any moment, also while the command starts up)."""
     try:
         try:
+            from .common import check_paths
+
             parser = build_parser()
             args = parser.parse_args(argv)
+            check_paths(args)
             return int(args.func(args))
         except Exception as exc:
             if isinstance(exc, reported_errors()):

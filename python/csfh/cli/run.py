@@ -42,7 +42,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     print(
         f"{scene.name} / {tr.model}: {s['contacts']} contacts"
         f"{f' (first at {first:.6f} s)' if first is not None else ''}, "
-        f"max F_N {s['max_F_N']:.4g} N, max indentation {s['max_indentation']:.3g} m, "
+        f"max {tr.force_label()} {s['max_F_N']:.4g} N, max indentation "
+        f"{s['max_indentation']:.3g} m, "
         f"{s['steps']} steps, {s['wall_time']:.2f} s -> {path}"
     )
     return 0
@@ -61,7 +62,8 @@ def _cmd_compare(args: argparse.Namespace) -> int:
             first = s["first_contact_time"]
             print(
                 f"  {tr.model:<13} first contact {first if first is None else f'{first:.6f}'}"
-                f" s, {s['contacts']:3d} contacts, max F_N {s['max_F_N']:10.4g} N, "
+                f" s, {s['contacts']:3d} contacts, max {tr.force_label():<16} "
+                f"{s['max_F_N']:10.4g} N, "
                 f"{s['wall_time']:6.2f} s"
             )
     print(f"wrote {len(result.files)} files to {out}")

@@ -177,6 +177,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 def cmd_tolerance(args: argparse.Namespace) -> int:
     from ..studies.tolerance.run import run_tolerance
+    from ..trajectory import force_label
 
     notes = _notes(args)
     outcome = run_tolerance(
@@ -195,7 +196,8 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
             fc = st["first_contact"]
             print(
                 f"  {model:<13} first contact {1e3 * fc['mean']:.3f} ± {1e3 * fc['std']:.3f} ms,"
-                f" peak F_N {st['peak_F_N']['mean']:.4g} ± {st['peak_F_N']['std']:.3g} N"
+                f" peak {force_label(model)} {st['peak_F_N']['mean']:.4g} ± "
+                f"{st['peak_F_N']['std']:.3g} N"
                 if fc["n"]
                 else f"  {model:<13} no contact"
             )

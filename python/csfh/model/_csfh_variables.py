@@ -28,6 +28,8 @@ MAX_OUTPUT_SAMPLES = 1_000_000
 MAX_MOREAU_STEPS = 1_000_000_000
 MAX_COMMUNICATION_POINTS = 5_000_000
 MAX_ME_STEPS = 5_000_000
+MAX_RUNS = 100_000
+MAX_DIRECTIONS = 3600
 CORE_ABI_VERSION = 2
 BATCH_ABI_VERSION = 2
 
@@ -121,8 +123,8 @@ INTERFACE = Interface(
         Variable("solver.method", 97, "Enumeration", "parameter", "fixed", start=1, declaredType="SolverMethod", description="Co-simulation integrator: auto (RK45, BDF when stiff), BDF, Adams or RK45; the relative tolerance is fmi2SetupExperiment's, in [2.2e-15, 1) (1e-6 when not given)"),
         Variable("solver.analytic_jacobian", 156, "Boolean", "parameter", "fixed", start=False, description="Co-simulation BDF: the analytic Jacobian of docs/model.md §15 as CVODE's Newton matrix (false: CVODE's difference quotients, the default: its trajectories are those of earlier runs bit for bit)"),
         Variable("solver.method_number", 98, "Integer", "parameter", "fixed", start=0, range=Range(0.0, 4.0), description="solver.method as a number, for importers that ignore Enumeration variables (libcosim): 0 keeps solver.method, 1 auto, 2 BDF, 3 Adams, 4 RK45"),
-        Variable("contact.F_N", 101, "Real", "output", "continuous", quantity="Force", unit="N", nominal=10000.0, description="Normal contact force on body 1 (>= 0, along n_c)"),
-        Variable("contact.F_T", 102, "Real", "output", "continuous", quantity="Force", unit="N", nominal=1000.0, description="Tangential friction force on body 1 along t_c"),
+        Variable("contact.F_N", 101, "Real", "output", "continuous", quantity="Force", unit="N", nominal=10000.0, description="Instantaneous normal contact force on body 1 (>= 0, along n_c), at the current time: in co-simulation 0 at most communication points, since a contact lasts far less than a typical step (microseconds to a millisecond); contact.F_N_peak is the largest over the step"),
+        Variable("contact.F_T", 102, "Real", "output", "continuous", quantity="Force", unit="N", nominal=1000.0, description="Instantaneous tangential friction force on body 1 along t_c, at the current time: in co-simulation 0 at most communication points (see contact.F_N); contact.F_T_peak is the largest |F_T| over the step"),
         Variable("contact.indentation", 103, "Real", "output", "continuous", quantity="Length", unit="m", nominal=0.0001, description="Indentation max(0, |e| - delta)"),
         Variable("contact.gap", 104, "Real", "output", "continuous", quantity="Length", unit="m", nominal=0.01, description="Gap function g = delta - |e| (the event indicator; contact when <= 0)"),
         Variable("contact.v_T", 105, "Real", "output", "continuous", quantity="Velocity", unit="m/s", description="Tangential velocity of body 1's contact point along t_c"),

@@ -5,6 +5,7 @@ FMU is built, the FMU's own checks."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from ..errors import ParameterError, SceneError
@@ -12,6 +13,7 @@ from ..paths import combdrive_fmu_path
 from ._combdrive_variables import INTERFACE
 from .fmus import Slave, description
 from .interface import Variable
+from .values import as_float, shown
 
 
 def actuator_description() -> Any:
@@ -38,7 +40,9 @@ def check_actuator(values: dict[str, Any]) -> dict[str, float | int]:
         else:
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise SceneError(f"cosim.actuator.{name} = {value!r} must be a number")
-            out[name] = float(value)
+            out[name] = as_float(value)
+        if not math.isfinite(as_float(value)):
+            raise SceneError(f"cosim.actuator.{name} = {shown(value)} must be a finite number")
         try:
             INTERFACE.check(name, out[name])
         except ParameterError as exc:

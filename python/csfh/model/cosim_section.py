@@ -39,17 +39,22 @@ variables, so with that engine an enumeration can only keep its FMU start value.
 
 from __future__ import annotations
 
-import math
+import sys
 from dataclasses import dataclass, field
 from typing import Any
 
 from ..errors import SceneError
 from ._csfh_variables import DEFAULT_TOLERANCE, OUTPUT_INTERVAL
 from .actuator import actuator_parameters, check_actuator
+from .values import number as _number
 
 ENGINES = ("fmpy", "libcosimpy")
 ORDERINGS = ("jacobi", "gauss-seidel")
 # DEFAULT_TOLERANCE: the csfh FMU's relative tolerance when fmi2SetupExperiment gives none
+
+MIN_TOLERANCE = 10 * sys.float_info.epsilon
+"""The smallest relative tolerance the csfh FMU accepts (FMU_TOLERANCE_MIN of
+fmu_src/fmu/fmu_instance.h, docs/guide/fmu.md#tolerance)."""
 
 CONNECTIONS = (("F_x", "F_ext[1]"), ("F_y", "F_ext[2]"), ("M", "M_ext"))
 """(actuator output, csfh input)."""
@@ -90,14 +95,6 @@ class CosimSettings:
         return round(self.step * 1e9)
 
 
-def _number(where: str, value: Any, positive: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise SceneError(f"{where} = {value!r} must be a finite number")
-    if positive and not value > 0:
-        raise SceneError(f"{where} = {value!r} must be > 0")
-    return float(value)
-
-
 def _keys(where: str, table: Any, allowed: set[str]) -> dict[str, Any]:
     if not isinstance(table, dict):
         raise SceneError(f"{where} must be a table")
@@ -124,8 +121,11 @@ def parse_cosim(table: dict[str, Any], inputs: dict[str, float] | None = None) -
     tolerance = table.get("tolerance")
     if tolerance is not None:
         tolerance = _number("cosim.tolerance", tolerance, positive=True)
-        if tolerance >= 1:
-            raise SceneError(f"cosim.tolerance = {tolerance} must be < 1")
+        if not MIN_TOLERANCE <= tolerance < 1:
+            raise SceneError(
+                f"cosim.tolerance = {tolerance!r} must be in [{MIN_TOLERANCE:.3g}, 1) (the csfh "
+                "FMU refuses a relative tolerance below 10 machine epsilons)"
+            )
     moment = table.get("moment", True)
     if not isinstance(moment, bool):
         raise SceneError(f"cosim.moment = {moment!r} must be true or false")

@@ -1,9 +1,9 @@
 """The run-length limits, in one place: how long a run may be, how many output rows, Moreau steps
-and communication points it may have. The numbers are the [harness] table of
-modelDescription/variables.toml (generated into `_csfh_variables`); every check of a run's
-length, whether its numbers come from a scene file, a command-line option or a runner's
-argument, is one of the functions here, so that no input exhausts the memory or runs for hours
-by accident."""
+and communication points it may have, how many runs a study may make. The numbers are the
+[harness] table of modelDescription/variables.toml (generated into `_csfh_variables`); every
+check of a run's length or a study's size, whether its numbers come from a scene file, a
+command-line option or a runner's argument, is one of the functions here, so that no input
+exhausts the memory or runs for hours by accident."""
 
 from __future__ import annotations
 
@@ -12,17 +12,22 @@ import math
 from ..errors import ParameterError, SceneError
 from ._csfh_variables import (
     MAX_COMMUNICATION_POINTS,
+    MAX_DIRECTIONS,
     MAX_MOREAU_STEPS,
     MAX_OUTPUT_SAMPLES,
+    MAX_RUNS,
     MAX_STOP_TIME,
 )
 
 __all__ = [
     "MAX_COMMUNICATION_POINTS",
+    "MAX_DIRECTIONS",
     "MAX_MOREAU_STEPS",
     "MAX_OUTPUT_SAMPLES",
+    "MAX_RUNS",
     "MAX_STOP_TIME",
     "check_communication_points",
+    "check_count",
     "check_horizon",
     "check_rows",
     "moreau_step_counts",
@@ -117,3 +122,12 @@ def check_communication_points(stop_time: float, step: float, step_key: str = "s
             f"{stop_time:g} s in steps of {step:g} s are more than "
             f"{MAX_COMMUNICATION_POINTS:g} communication points: give a larger {step_key}"
         )
+
+
+def check_count(key: str, value: int, maximum: int, what: str) -> int:
+    """A count of runs (`what`: of what, for the message) of at most `maximum`, so that a typo
+    does not start days of runs or fill the memory with their tasks; ParameterError naming the
+    key (an option or a file's key) and the value otherwise."""
+    if value > maximum:
+        raise ParameterError(f"{key} = {value} is more than {maximum:g}, the most {what}")
+    return value

@@ -6,6 +6,7 @@ run the FMU."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from functools import cache
 from typing import TYPE_CHECKING
@@ -14,6 +15,7 @@ from ..errors import ParameterError
 from ..paths import fmu_path
 from ._csfh_variables import INTERFACE
 from .interface import Variable
+from .values import as_float, shown
 
 if TYPE_CHECKING:
     from fmpy.model_description import ModelDescription
@@ -83,10 +85,14 @@ def coerce(name: str, value: object) -> float | int | bool:
         return value
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ParameterError(f"{name} = {value!r} must be a number")
+    if not math.isfinite(as_float(value)):
+        raise ParameterError(f"{name} = {shown(value)} must be a finite number")
     return float(value)
 
 
 def check(name: str, value: float | int | bool) -> None:
     """ParameterError, in the FMU's words, when the FMU would refuse `value` for `name` (its
-    range, an enumeration's items, finiteness)."""
+    range, an enumeration's items, finiteness; an integer beyond the doubles is not finite)."""
+    if not math.isfinite(as_float(value)):
+        raise ParameterError(f"{name} = {shown(value)} is not finite")
     INTERFACE.check(name, float(value))

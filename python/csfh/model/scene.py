@@ -61,7 +61,6 @@ run-length limits, csfh.model.limits, and the defaults of the keys are the [harn
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field, fields, replace
 from importlib import resources
 from pathlib import Path
@@ -81,6 +80,8 @@ from ._csfh_variables import (
 from .cosim_section import parse_cosim
 from .limits import check_horizon
 from .presets import PRESETS
+from .scene_files import locate, parse, read_text
+from .values import number as _number
 
 STICK_RULES = ("paper", "memory")
 
@@ -195,16 +196,6 @@ _TOP_KEYS = {
     "cosim",
 }
 _INPUTS = ("F_ext[1]", "F_ext[2]", "M_ext", "a_base[1]", "a_base[2]")
-
-
-def _number(where: str, value: Any, positive: bool = False, nonnegative: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise SceneError(f"{where} = {value!r} must be a finite number")
-    if positive and not value > 0:
-        raise SceneError(f"{where} = {value!r} must be > 0")
-    if nonnegative and not value >= 0:
-        raise SceneError(f"{where} = {value!r} must be >= 0")
-    return float(value)
 
 
 def _table(where: str, value: Any, allowed: set[str] | None = None) -> dict[str, Any]:
@@ -437,33 +428,10 @@ def load_scene(scene: str | Path) -> Scene:
     """A built-in scene by name (csfh.scenes.BUILTIN_SCENES: ``central``, ``csfh``, ...) or a
     scene file by path. Raises :class:`SceneError` with a one-line message naming the file, the
     key and the value when the scene cannot be used."""
-    path = Path(scene)
-    if path.suffix == ".toml" or path.exists():
-        if not path.is_file():
-            raise SceneError(f"{path}: no such scene file")
-        try:
-            raw = path.read_bytes()
-        except OSError as exc:
-            raise SceneError(f"{path}: cannot be read ({exc.strerror or exc})") from None
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            line = raw[: exc.start].count(b"\n") + 1
-            raise SceneError(
-                f"{path}: not UTF-8 text (TOML files are UTF-8): byte 0x{raw[exc.start]:02x} "
-                f"at line {line}"
-            ) from None
-        source = str(path)
-    elif str(scene) in BUILTIN_SCENES:
+    path = locate(scene, BUILTIN_SCENES)
+    if path is None:
         text = resources.files("csfh").joinpath("scenes", f"{scene}.toml").read_text("utf-8")
         source = f"{scene} (built-in)"
     else:
-        raise SceneError(
-            f"unknown scene {str(scene)!r}: use one of {', '.join(BUILTIN_SCENES)} "
-            "or the path of a .toml scene file"
-        )
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{source}: not valid TOML: {exc}") from None
-    return scene_from_dict(data, source)
+        text, source = read_text(path), str(path)
+    return scene_from_dict(parse(text, source), source)

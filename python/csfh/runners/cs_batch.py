@@ -67,9 +67,12 @@ SUMMARY_OUTPUTS: tuple[Output, ...] = (
     ("contact.pressure_max_peak", "time_of_max"),
     ("diagnostics.integrator_steps", "final"),
     ("diagnostics.rhs_evaluations", "final"),
+    ("contact.release_time", "final"),
+    ("contact.active", "final"),
 )
 """What every batched run returns: the quantities of `Trajectory.summary` of a co-simulation
-run (contact count, first onset, largest peaks, steps) and the stress peaks with their times."""
+run (contact count, first onset, largest peaks, steps), the stress peaks with their times, and
+when the last contact ended (and whether one is still on at the end: the settling of a shock)."""
 
 _EVENT_OUTPUTS = ("contact.count", "contact.active", *EVENT_NAMES)
 TABLE_OUTPUTS: tuple[str, ...] = (
@@ -199,7 +202,16 @@ class CsBatchResult:
             "max_contact_pressure": self.value(i, "contact.pressure_max_peak", "max"),
             "steps": int(self.value(i, "diagnostics.integrator_steps")),
             "rhs_evaluations": int(self.value(i, "diagnostics.rhs_evaluations")),
+            "last_release_time": self._last_release(i),
+            "contact_at_end": int(self.value(i, "contact.active") > 0.0),
         }
+
+    def _last_release(self, i: int) -> float | None:
+        """When the last contact of run i that ended did (None: none ended)."""
+        count = int(self.value(i, "contact.count"))
+        if count == 0 or (count == 1 and self.value(i, "contact.active") > 0.0):
+            return None
+        return self.value(i, "contact.release_time")
 
     def trajectory(self, i: int) -> Trajectory:
         """Run i as the Trajectory `simulate_cs` returns (needs records of TABLE_OUTPUTS): the

@@ -6,12 +6,18 @@ dense output (CVodeGetDky), a stop time and the step count.
 
 The right-hand side and the root function return -1 (CVODE then stops with a failure flag)
 instead of raising inside the ctypes callback, where the exception would be printed and lost;
-the first exception is kept in `callback_error` for the caller to report."""
+the first exception is kept in `callback_error` for the caller to report. A Ctrl-C must not
+raise there either: while CVODE steps, SIGINT only marks the step interrupted (`HeldInterrupt`),
+the callbacks then return -1 at once, and the step raises KeyboardInterrupt once CVODE has
+returned."""
 
 from __future__ import annotations
 
 import math
+import signal
+import threading
 from ctypes import byref, c_int, c_long, c_void_p, cast
+from types import FrameType
 from typing import Any
 
 import numpy as np
@@ -22,6 +28,35 @@ CV_ONE_STEP = 2  # cvode.h (fmpy's binding leaves it commented out)
 CV_TSTOP_RETURN = 1  # cvode.h
 MAX_NUM_STEPS = 100_000
 """CVODE's limit of internal steps per call (one call is one step here)."""
+
+
+class HeldInterrupt:
+    """A block in which SIGINT sets `pending` instead of raising KeyboardInterrupt (which,
+    raised inside a ctypes callback, would be printed and lost); KeyboardInterrupt is raised
+    when the block ends. Only where Python's own SIGINT handler is in place (the main thread;
+    not in worker processes, which ignore SIGINT)."""
+
+    def __init__(self) -> None:
+        self.pending = False
+        self._previous: Any = None
+
+    def _handler(self, signum: int, frame: FrameType | None) -> None:
+        self.pending = True
+
+    def __enter__(self) -> HeldInterrupt:
+        self.pending = False
+        held = threading.current_thread() is threading.main_thread() and (
+            signal.getsignal(signal.SIGINT) is signal.default_int_handler
+        )
+        self._previous = signal.signal(signal.SIGINT, self._handler) if held else None
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+            self._previous = None
+        if self.pending and exc[0] is None:
+            raise KeyboardInterrupt
 
 
 def _cvode_function(name: str, argtypes: list[Any]) -> Any:
@@ -45,6 +80,7 @@ class CvodeStepper:
         self.fmu, self.nx, self.nz, self.rtol = fmu, nx, nz, rtol
         self.realtype = types.sunrealtype
         self.callback_error: BaseException | None = None
+        self.interrupt = HeldInterrupt()
         self.error_info: tuple[Any, ...] | None = None
         self.sunctx = types.SUNContext()
         self._check(ctx.SUNContext_Create(types.SUN_COMM_NULL, byref(self.sunctx)))
@@ -101,11 +137,13 @@ class CvodeStepper:
     def _rhs(self, t: float, y: Any, ydot: Any, user_data: Any) -> int:
         from fmpy.sundials.nvector_serial import NV_DATA_S
 
+        if self.interrupt.pending:
+            return -1  # Ctrl-C: CVODE returns, the step raises KeyboardInterrupt
         try:
             self.fmu.setTime(t)
             self.fmu.setContinuousStates(NV_DATA_S(y), self.nx)
             self.fmu.getDerivatives(NV_DATA_S(ydot), self.nx)
-        except Exception as exc:  # reported by the caller
+        except BaseException as exc:  # reported by the caller
             self.callback_error = self.callback_error or exc
             return -1
         return 0
@@ -113,11 +151,13 @@ class CvodeStepper:
     def _roots(self, t: float, y: Any, gout: Any, user_data: Any) -> int:
         from fmpy.sundials.nvector_serial import NV_DATA_S
 
+        if self.interrupt.pending:
+            return -1  # Ctrl-C: CVODE returns, the step raises KeyboardInterrupt
         try:
             self.fmu.setTime(t)
             self.fmu.setContinuousStates(NV_DATA_S(y), self.nx)
             self.fmu.getEventIndicators(gout, self.nz)
-        except Exception as exc:  # reported by the caller
+        except BaseException as exc:  # reported by the caller
             self.callback_error = self.callback_error or exc
             return -1
         return 0
@@ -126,7 +166,8 @@ class CvodeStepper:
         """One internal step towards t_out: (CVODE's flag, the time reached)."""
         from fmpy.sundials.cvode import CVode
 
-        flag = CVode(self.mem, t_out, self.x, byref(self._tret), CV_ONE_STEP)
+        with self.interrupt:
+            flag = CVode(self.mem, t_out, self.x, byref(self._tret), CV_ONE_STEP)
         return int(flag), float(self._tret.value)
 
     def message(self) -> str:

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..plotting import model_style, save, subplots
-from ..trajectory import Trajectory
+from ..trajectory import IMPULSIVE_MODELS, Trajectory
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -63,10 +63,10 @@ def _finish(fig: Figure, handles_from: Axes | None = None) -> Figure:
 
 def _force_axis(ax: Axes, runs: Sequence[Trajectory], column: str, ylabel: str) -> None:
     """Contact forces: log scale when the Moreau impulse 'forces' (~1/h) sit next to the
-    compliant forces, so that both are readable."""
-    has_moreau = any(tr.model == "Moreau" for tr in runs) and any(
-        np.any(np.abs(tr[column]) > 0) for tr in runs
-    )
+    compliant forces, so that both are readable; the label says that Moreau's are impulses over
+    the step (csfh.trajectory.force_label)."""
+    impulsive = any(tr.model in IMPULSIVE_MODELS for tr in runs)
+    has_moreau = impulsive and any(np.any(np.abs(tr[column]) > 0) for tr in runs)
     for tr in runs:
         y = np.abs(tr[column]) if has_moreau else tr[column]
         ax.plot(tr.t, y, lw=0.9, **_style(tr))
@@ -75,9 +75,8 @@ def _force_axis(ax: Axes, runs: Sequence[Trajectory], column: str, ylabel: str) 
         # five decades below the largest force, whatever the scale (mN at MEMS scale)
         top = max(float(np.max(np.abs(tr[column]), initial=0.0)) for tr in runs)
         ax.set_ylim(top * 1e-5, top * 3)
-        ax.set_ylabel(ylabel.replace("[N]", "| [N] (log)").replace("$F", "|$F"))
-    else:
-        ax.set_ylabel(ylabel)
+        ylabel = ylabel.replace("[N]", "| [N] (log)").replace("$F", "|$F")
+    ax.set_ylabel(f"{ylabel}\nMoreau: impulse / h" if impulsive else ylabel)
 
 
 def time_histories(runs: Sequence[Trajectory], title: str) -> Figure:

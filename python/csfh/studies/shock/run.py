@@ -12,7 +12,7 @@ from typing import Any
 from ...batch.store import ResultStore
 from ...errors import ParameterError
 from ...model import model_info
-from ...model.limits import check_communication_points
+from ...model.limits import MAX_DIRECTIONS, MAX_RUNS, check_communication_points, check_count
 from ...model.scene import Scene, load_scene
 from ...output import output_set
 from ..execution import Execution, counts, execute, open_store
@@ -59,6 +59,10 @@ class ShockOutcome:
 def shock_spec(request: ShockRequest) -> study.ShockSpec:
     """The study's spec, every option checked before anything runs."""
     r = request
+    if r.directions is not None:
+        check_count("--directions", r.directions, MAX_DIRECTIONS, "directions of a shock sweep")
+    if r.runs is not None:
+        check_count("--runs", r.runs, MAX_RUNS, tolerance.RUNS_WHAT)
     scene = r.scene if isinstance(r.scene, Scene) else load_scene(r.scene)
     scene = study.at_rest(scene)
     models = study.check_models(r.models or model_info.LAWS)

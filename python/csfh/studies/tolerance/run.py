@@ -12,6 +12,7 @@ from typing import Any
 
 from ...batch.executors import RunReport
 from ...errors import ParameterError
+from ...model.limits import MAX_RUNS, check_count
 from ...model.scene import check_run_horizon
 from ...output import output_set
 from ..execution import (
@@ -42,6 +43,8 @@ def tolerance_study(
     source: str | Path, runs: int | None, seed: int | None, models: Sequence[str] | None
 ) -> tolerance.ToleranceStudy:
     """The study of a tolerance file (or a built-in scene), with the options' overrides."""
+    if runs is not None:
+        check_count("--runs", runs, MAX_RUNS, tolerance.RUNS_WHAT)
     study = tolerance.load_study(source)
     if seed is not None and seed < 0:
         raise ParameterError(f"--seed {seed} must be >= 0")

@@ -35,9 +35,13 @@ from ...batch.tasks import Task
 from ...errors import ParameterError, SceneError
 from ...model import model_info
 from ...model.instance import core_model, nominal_values
+from ...model.limits import MAX_RUNS, check_count
 from ...model.scene import Scene, scene_from_dict
+from ...model.scene_files import locate, parse, read_text
+from ...model.values import as_float, shown
 
 DEFAULT_FILE = "tolerance_csfh"
+RUNS_WHAT = "Monte Carlo samples per model (csfh.model.limits)"
 QUANTITIES = ("first_contact", "peak_F_N", "peak_abs_F_T")
 LABELS = {
     "first_contact": ("first-contact time", "ms", 1e3),
@@ -76,8 +80,12 @@ class ToleranceStudy:
 
 
 def _finite(value: Any) -> bool:
-    """A finite number (not a boolean)."""
-    return not isinstance(value, bool) and isinstance(value, int | float) and math.isfinite(value)
+    """A finite number (not a boolean; not an integer beyond the doubles)."""
+    return (
+        not isinstance(value, bool)
+        and isinstance(value, int | float)
+        and math.isfinite(as_float(value))
+    )
 
 
 def _parse_distribution(key: str, spec: Any) -> Distribution:
@@ -94,10 +102,10 @@ def _parse_distribution(key: str, spec: Any) -> Distribution:
         raise ToleranceError(f"{where} needs exactly one of sigma (normal) or half_width (uniform)")
     width = spec[kinds[0]]
     if not _finite(width) or width <= 0:
-        raise ToleranceError(f"{where}: {kinds[0]} = {width!r} must be a number > 0")
+        raise ToleranceError(f"{where}: {kinds[0]} = {shown(width)} must be a number > 0")
     mean = spec.get("mean")
     if mean is not None and not _finite(mean):
-        raise ToleranceError(f"{where}: mean = {mean!r} must be a finite number")
+        raise ToleranceError(f"{where}: mean = {shown(mean)} must be a finite number")
     return Distribution(
         "normal" if kinds[0] == "sigma" else "uniform",
         float(width),
@@ -107,7 +115,7 @@ def _parse_distribution(key: str, spec: Any) -> Distribution:
 
 def _int_option(where: str, value: Any, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise ToleranceError(f"{where} = {value!r} must be an integer >= {minimum}")
+        raise ToleranceError(f"{where} = {shown(value)} must be an integer >= {minimum}")
     return value
 
 
@@ -137,6 +145,10 @@ def _parse_montecarlo(mc: Any) -> tuple[int, int]:
             f"[montecarlo]: unknown key {unknown[0]!r} (allowed: models, runs, seed)"
         )
     runs = _int_option("montecarlo.runs", mc.get("runs", 200), 1)
+    try:
+        check_count("montecarlo.runs", runs, MAX_RUNS, RUNS_WHAT)
+    except ParameterError as exc:
+        raise ToleranceError(str(exc)) from None
     seed = _int_option("montecarlo.seed", mc.get("seed", 1), 0)
     return runs, seed
 
@@ -185,30 +197,20 @@ def _default_tolerances() -> dict[str, Any]:
     return dict(tomllib.loads(text)["tolerance"])
 
 
+def _builtin_names() -> list[str]:
+    scenes = resources.files("csfh").joinpath("scenes")
+    return [e.name.removesuffix(".toml") for e in scenes.iterdir() if e.name.endswith(".toml")]
+
+
 def _read(arg: str | Path) -> tuple[dict[str, Any], str]:
-    """The TOML of a tolerance file by path, or of a built-in scene by name, and its source."""
-    path = Path(arg)
-    if path.suffix == ".toml" or path.exists():
-        if not path.is_file():
-            raise ToleranceError(f"{path}: no such tolerance file")
-        try:
-            text, source = path.read_text(encoding="utf-8"), str(path)
-        except UnicodeDecodeError:
-            raise ToleranceError(f"{path}: not UTF-8 text (TOML files are UTF-8)") from None
-        except OSError as exc:
-            raise ToleranceError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    """The TOML of a tolerance file by path, or of a built-in scene by name, and its source
+    (which file an argument names: csfh.model.scene_files)."""
+    path = locate(arg, _builtin_names(), "tolerance", ToleranceError)
+    if path is None:
+        text, source = str(_builtin_text(str(arg))), f"{arg} (built-in)"
     else:
-        builtin = _builtin_text(str(arg)) if "/" not in str(arg) else None
-        if builtin is None:
-            raise ToleranceError(
-                f"unknown scene {str(arg)!r}: use {DEFAULT_FILE}, a built-in "
-                "scene or the path of a .toml tolerance file"
-            )
-        text, source = builtin, f"{arg} (built-in)"
-    try:
-        return tomllib.loads(text), source
-    except tomllib.TOMLDecodeError as exc:
-        raise ToleranceError(f"{source}: not valid TOML: {exc}") from None
+        text, source = read_text(path, ToleranceError), str(path)
+    return parse(text, source, ToleranceError), source
 
 
 def load_study(arg: str | Path) -> ToleranceStudy:
