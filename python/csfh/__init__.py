@@ -51,6 +51,8 @@ if TYPE_CHECKING:
     from .runners.moreau import moreau
     from .runners.simulate import simulate
     from .studies.compare import Comparison, compare
+    from .studies.linearize.result import Linearization
+    from .studies.linearize.run import linearize
     from .trajectory import Trajectory
 
 _PUBLIC = {
@@ -59,6 +61,7 @@ _PUBLIC = {
     "CsBatchResult": "csfh.runners.cs_batch",
     "CsfhError": "csfh.errors",
     "IntegratorSettings": "csfh.model.scene",
+    "Linearization": "csfh.studies.linearize.result",
     "ParameterError": "csfh.errors",
     "Scene": "csfh.model.scene",
     "SceneError": "csfh.errors",
@@ -71,6 +74,7 @@ _PUBLIC = {
     "cosimulate": "csfh.cosim.run",
     "cs_batch": "csfh.runners.cs_batch",
     "fmu_path": "csfh.paths",
+    "linearize": "csfh.studies.linearize.run",
     "load_scene": "csfh.model.scene",
     "moreau": "csfh.runners.moreau",
     "scene_from_dict": "csfh.model.scene",
@@ -86,6 +90,7 @@ __all__ = [
     "CsBatchResult",
     "CsfhError",
     "IntegratorSettings",
+    "Linearization",
     "ParameterError",
     "Scene",
     "SceneError",
@@ -99,6 +104,7 @@ __all__ = [
     "cosimulate",
     "cs_batch",
     "fmu_path",
+    "linearize",
     "load_scene",
     "moreau",
     "scene_from_dict",

@@ -20,14 +20,14 @@ def build_parser() -> Any:
     import argparse
 
     from .._version import __version__
-    from . import accuracy, common, cosim, run, shock, sweep
+    from . import accuracy, common, cosim, linearize, run, shock, sweep
 
     parser = argparse.ArgumentParser(
         prog="csfh", description=__doc__, formatter_class=common.HelpFormatter
     )
     parser.add_argument("--version", action="version", version=f"csfh {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for module in (run, accuracy, sweep, shock, cosim):  # each defines its commands
+    for module in (run, accuracy, sweep, shock, cosim, linearize):  # each defines its commands
         module.register(sub)
     return parser
 

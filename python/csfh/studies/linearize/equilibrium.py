@@ -29,6 +29,9 @@ TOLERANCE = 1e-9
 """Convergence: the last Newton step below this fraction of the model's length scale in every
 coordinate (1e3 x the finite-difference steps: the indentation in contact, the clearance in
 flight)."""
+MAX_STEP = 1e3
+"""A Newton step longer than this many length scales ends the solve unconverged: the stiffness
+is round-off (a free flight under a constant force)."""
 RESIDUAL = 1e-9
 """Convergence: the accelerations below this fraction of the largest change of an acceleration
 over one length scale (the stiffness times the scale)."""
@@ -99,12 +102,15 @@ class BorePolar:
     straight Newton step along the bore would push body 1 into it by step^2 / 2 delta, far deeper
     than the indentation, and the radius alone sets the stiff normal force."""
 
-    def __init__(self, s1bar: np.ndarray) -> None:
+    def __init__(self, s1bar: np.ndarray, delta: float, R1: float) -> None:
         self.s1bar = np.asarray(s1bar, dtype=float)
+        self.delta, self.R1 = delta, R1
 
     def _s1(self, theta: float) -> np.ndarray:
         c, s = math.cos(theta), math.sin(theta)
-        return np.array([c * self.s1bar[0] - s * self.s1bar[1], s * self.s1bar[0] + c * self.s1bar[1]])
+        return np.array(
+            [c * self.s1bar[0] - s * self.s1bar[1], s * self.s1bar[0] + c * self.s1bar[1]]
+        )
 
     def to_q(self, p: np.ndarray) -> np.ndarray:
         e = p[0] * np.array([math.cos(p[1]), math.sin(p[1])])
@@ -121,7 +127,9 @@ class BorePolar:
         return np.array([[c, -p[0] * s, s1[1]], [s, p[0] * c, -s1[0]], [0.0, 0.0, 1.0]])
 
     def scales(self, q_scales: np.ndarray, p: np.ndarray) -> np.ndarray:
-        return np.array([q_scales[0], q_scales[1] / p[0], q_scales[2]])
+        """The indentation for the radius; the clearance along the bore and for the rotation,
+        which leave the gap alone in these coordinates."""
+        return np.array([q_scales[0], self.delta / p[0], self.delta / self.R1])
 
 
 def newton(
@@ -134,6 +142,7 @@ def newton(
     p = coords.from_q(np.array(q, dtype=float))
     r = _residual(plant, coords.to_q(p), u)
     path = [coords.to_q(p)]
+    it = 0
     for it in range(1, MAX_ITERATIONS + 1):
         x = np.concatenate([coords.to_q(p), np.zeros(3)])
         scale = coords.scales(1e3 * fd_steps(plant, x, u)[:3], p)
@@ -141,6 +150,8 @@ def newton(
         r_tol = RESIDUAL * float(np.max(np.abs(K)))
         step, _, rank, _ = np.linalg.lstsq(K, -r, rcond=1e-12)
         small = bool(np.max(np.abs(r)) <= r_tol)
+        if np.max(np.abs(step)) > MAX_STEP:  # a stiffness at round-off: nothing holds body 1
+            break
         t, r_new = _line_search(plant, coords, p, step * scale, r, u)
         if r_new is None or (small and np.max(np.abs(step)) < TOLERANCE):
             # no descent left: converged when the residual is already at round-off
@@ -148,7 +159,7 @@ def newton(
             return NewtonResult(q_end, small, it, float(np.max(np.abs(r))), int(rank), path)
         p, r = p + t * step * scale, r_new
         path.append(coords.to_q(p))
-    return NewtonResult(coords.to_q(p), False, MAX_ITERATIONS, float(np.max(np.abs(r))), 3, path)
+    return NewtonResult(coords.to_q(p), False, it, float(np.max(np.abs(r))), 3, path)
 
 
 def _line_search(
@@ -193,12 +204,13 @@ def _solve_in_mode(
     with plant_at(q0) as plant:
         contact = plant.in_contact()
         s1bar = np.array([plant.value("body1.s1[1]"), plant.value("body1.s1[2]")])
-        coords = BorePolar(s1bar) if contact else Cartesian()
+        delta = plant.value("contact.R2") - plant.value("contact.R1")
+        R1 = plant.value("contact.R1")
+        coords: Any = BorePolar(s1bar, delta, R1) if contact else Cartesian()
         result = newton(plant, source, q0, u, coords)
         gap, indentation = _contact_values(plant, result.q, u)
         entry = None
         if not contact and not (result.converged and gap > 0.0):
-            delta = plant.value("contact.R2") - plant.value("contact.R1")
             path = result.path + _drift(plant, result.q, u, delta)
             if any(_contact_values(plant, q, u)[0] < 0.0 for q in path):
                 entry = _entry_point(plant, path, u, 1e-4 * delta)
@@ -216,6 +228,27 @@ def _drift(plant: Plant, q: np.ndarray, u: np.ndarray, delta: float) -> list[np.
     return [q + delta * 2.0**k / 64 * direction / norm for k in range(9)]
 
 
+def _next_start(
+    contact: bool, result: NewtonResult, gap: float, entry: np.ndarray | None, tried: set[bool]
+) -> np.ndarray | None:
+    """Where to start the solve in the other mode (None: nowhere left)."""
+    if not contact and entry is not None and True not in tried:
+        return entry
+    if contact and result.converged and gap > 0.0 and False not in tried:
+        return result.q
+    return None
+
+
+def _failure(attempts: list[str], result: NewtonResult) -> SimulationError:
+    if not math.isfinite(result.residual):
+        return SimulationError("equilibrium: Newton's method diverged (non-finite accelerations)")
+    q = ", ".join(f"{v:.9g}" for v in result.q)
+    return SimulationError(
+        "equilibrium: Newton's method found no equilibrium consistent with the contact mode ("
+        f"{'; '.join(attempts)}; last residual {result.residual:.3g} at q = [{q}])"
+    )
+
+
 def static_equilibrium(
     plant_at: PlantAt, source: JacobianSource, q0: np.ndarray, u: np.ndarray
 ) -> Equilibrium:
@@ -229,26 +262,16 @@ def static_equilibrium(
         result, contact, gap, indentation, entry = _solve_in_mode(plant_at, source, start, u)
         mode = "contact" if contact else "flight"
         total += result.iterations
+        if contact in tried:  # the FMU started in a mode already solved (law none: no contact)
+            break
         tried.add(contact)
-        consistent = indentation > 0.0 if contact else gap > 0.0
         attempts.append(
             f"{mode}: {'converged' if result.converged else 'not converged'} in "
             f"{result.iterations} iterations, gap {gap:.6g} m"
         )
-        if result.converged and consistent:
+        if result.converged and (indentation > 0.0 if contact else gap > 0.0):
             return Equilibrium(
                 result.q, mode, total, result.residual, result.rank, gap, indentation, attempts
             )
-        start = None
-        if not contact and entry is not None and True not in tried:
-            start = entry
-        elif contact and result.converged and gap > 0.0 and False not in tried:
-            start = result.q
-    raise SimulationError(
-        "equilibrium: Newton's method found no equilibrium consistent with the contact mode ("
-        + "; ".join(attempts)
-        + f"; last residual {result.residual:.3g} at q = "
-        + "[" + ", ".join(f"{v:.9g}" for v in result.q) + "])"
-        if math.isfinite(result.residual)
-        else "equilibrium: Newton's method diverged (non-finite accelerations)"
-    )
+        start = _next_start(contact, result, gap, entry, tried)
+    raise _failure(attempts, result)

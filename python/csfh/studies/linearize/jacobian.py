@@ -40,6 +40,15 @@ OUTPUTS = (
 and forces, and the flexure's peak stress (§3, §4, §14.2)."""
 model_info.require((*INPUTS, *OUTPUTS), "studies.linearize.jacobian")
 
+
+def check_names(input_name: str, output_name: str) -> None:
+    """ParameterError unless the Bode plot's input and output are among INPUTS and OUTPUTS."""
+    if input_name not in INPUTS:
+        raise ParameterError(f"input {input_name!r} is not one of {', '.join(INPUTS)}")
+    if output_name not in OUTPUTS:
+        raise ParameterError(f"output {output_name!r} is not one of {', '.join(OUTPUTS)}")
+
+
 _dp = ctypes.POINTER(ctypes.c_double)
 
 

@@ -15,96 +15,27 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ...errors import ParameterError
+from ...errors import ParameterError, SimulationError
 from ...model import model_info
 from ...model._csfh_variables import MAX_STOP_TIME
 from ...model.scene import Scene, load_scene
 from .equilibrium import Equilibrium, static_equilibrium
-from .jacobian import INPUTS, OUTPUTS, STATES, Jacobians, Plant, source
-from .modes import Mode, eigenvalues, oscillatory_modes
+from .jacobian import INPUTS, STATES, Plant, check_names, source
+from .modes import eigenvalues, oscillatory_modes
+from .result import Linearization
 
 AT_NAMES = ("start", "equilibrium")
 
 
-@dataclass(frozen=True)
-class Linearization:
-    """A, B, C, D at one operating point, with its eigenvalues and oscillatory modes."""
-
-    scene: str
-    model: str
-    at: str  # "start", "equilibrium" or "t = T s"
-    jacobian: str  # the source's name
-    jacobians: Jacobians
-    operating_point: np.ndarray  # the states
-    input_values: np.ndarray
-    state_derivatives: np.ndarray  # dx/dt at the point (zero at an equilibrium)
-    in_contact: bool
-    eigenvalues: np.ndarray
-    modes: list[Mode]
-    equilibrium: Equilibrium | None = None
-    states: tuple[str, ...] = STATES
-    inputs: tuple[str, ...] = INPUTS
-    outputs: tuple[str, ...] = OUTPUTS
-
-    @property
-    def A(self) -> np.ndarray:
-        return self.jacobians.A
-
-    @property
-    def B(self) -> np.ndarray:
-        return self.jacobians.B
-
-    @property
-    def C(self) -> np.ndarray:
-        return self.jacobians.C
-
-    @property
-    def D(self) -> np.ndarray:
-        return self.jacobians.D
-
-    @property
-    def frequencies_hz(self) -> list[float]:
-        return [m.frequency_hz for m in self.modes]
-
-    @property
-    def damping_ratios(self) -> list[float]:
-        return [m.damping_ratio for m in self.modes]
-
-    def to_json(self) -> dict[str, Any]:
-        """The content of linearization.json (its keys in docs/guide/linearize.md)."""
-        return {
-            "scene": self.scene,
-            "model": self.model,
-            "at": self.at,
-            "jacobian": self.jacobian,
-            "contact_mode": "contact" if self.in_contact else "flight",
-            "states": list(self.states),
-            "inputs": list(self.inputs),
-            "outputs": list(self.outputs),
-            "operating_point": self.operating_point.tolist(),
-            "input_values": self.input_values.tolist(),
-            "state_derivatives": self.state_derivatives.tolist(),
-            "A": self.A.tolist(),
-            "B": self.B.tolist(),
-            "C": self.C.tolist(),
-            "D": self.D.tolist(),
-            "eigenvalues": [[float(z.real), float(z.imag)] for z in self.eigenvalues],
-            "frequencies_hz": self.frequencies_hz,
-            "damped_frequencies_hz": [m.damped_frequency_hz for m in self.modes],
-            "damping_ratios": self.damping_ratios,
-            "equilibrium": self.equilibrium.summary() if self.equilibrium else None,
-        }
-
-
-def parse_at(at: str | float) -> str | float:
-    """"start", "equilibrium" or a time in s (>= 0, at most MAX_STOP_TIME); ParameterError
-    naming the value otherwise."""
+def parse_at(at: str | float, what: str = "at") -> str | float:
+    """ "start", "equilibrium" or a time in s (>= 0, at most MAX_STOP_TIME); ParameterError
+    naming `what` and the value otherwise."""
     if isinstance(at, str) and at in AT_NAMES:
         return at
     try:
@@ -113,7 +44,7 @@ def parse_at(at: str | float) -> str | float:
         t = math.nan
     if isinstance(at, bool) or not (0.0 <= t <= MAX_STOP_TIME):
         raise ParameterError(
-            f"at = {at!r} must be start, equilibrium or a time in s in [0, {MAX_STOP_TIME:g}]"
+            f"{what} = {at!r} must be start, equilibrium or a time in s in [0, {MAX_STOP_TIME:g}]"
         )
     return t
 
@@ -134,15 +65,17 @@ def law_of(scene: Scene, model: str | None) -> str:
     return model
 
 
-def _plant_at(
-    scene: Scene, law: str, parameters: dict[str, Any] | None
-) -> Any:
+def _triple(q: np.ndarray) -> tuple[float, float, float]:
+    return (float(q[0]), float(q[1]), float(q[2]))
+
+
+def _plant_at(scene: Scene, law: str, parameters: dict[str, Any] | None) -> Any:
     """q -> a context manager of a plant started at rest at q (for the equilibrium solve)."""
     from ...runners.model_exchange import instance_at
 
     @contextmanager
     def plant_at(q: np.ndarray) -> Iterator[Plant]:
-        at_q = replace(scene, q0=tuple(float(v) for v in q), u0=(0.0, 0.0, 0.0))
+        at_q = replace(scene, q0=_triple(q), u0=(0.0, 0.0, 0.0))
         with instance_at(at_q, law, parameters=parameters) as fmu:
             yield Plant(fmu)
 
@@ -156,6 +89,9 @@ def linearize(
     at: str | float = "start",
     jacobian: str | None = None,
     parameters: dict[str, Any] | None = None,
+    out: str | Path | None = None,
+    input: str = "F_ext[2]",
+    output: str = "body1.y",
 ) -> Linearization:
     """The state-space model of `scene` (a Scene, a built-in scene's name or a scene file) with
     contact law `model` (default: the scene's) at `at`: ``"start"`` (the scene's initial
@@ -164,28 +100,32 @@ def linearize(
     scene's configuration; SimulationError when Newton's method does not converge).
     `jacobian`: ``"fd"`` (finite differences) or ``"directional"`` (the FMU's
     fmi2GetDirectionalDerivative); default: the FMU's where it provides them. `parameters`:
-    FMU parameters on top of the scene's."""
+    FMU parameters on top of the scene's. With `out`, writes linearization.json, .npz, .md
+    and bode.png (from `input` to `output`) into that directory."""
     from ...runners.model_exchange import instance_at
 
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     point = parse_at(at)
     law = law_of(scene, model)
+    check_names(input, output)
     src = source(jacobian)
     eq: Equilibrium | None = None
     start = scene
     if point == "equilibrium":
         u = np.array([scene.inputs.get(n, 0.0) for n in INPUTS])
         eq = static_equilibrium(_plant_at(scene, law, parameters), src, np.array(scene.q0), u)
-        start = replace(scene, q0=tuple(float(v) for v in eq.q), u0=(0.0, 0.0, 0.0))
+        start = replace(scene, q0=_triple(eq.q), u0=(0.0, 0.0, 0.0))
     time = point if isinstance(point, float) else 0.0
     with instance_at(start, law, time, parameters=parameters) as fmu:
         plant = Plant(fmu)
         jac = src.jacobians(plant, plant.x, plant.u)
         xdot = plant.evaluate(plant.x, plant.u)[: len(STATES)]
         contact = plant.in_contact()
+    if not all(np.all(np.isfinite(M)) for M in (jac.A, jac.B, jac.C, jac.D)):
+        raise SimulationError(f"{scene.name}: the Jacobians at {at!r} are not finite")
     lam = eigenvalues(jac.A)
-    return Linearization(
+    lin = Linearization(
         scene=scene.name,
         model=law,
         at=point if isinstance(point, str) else f"t = {point:g} s",
@@ -199,3 +139,8 @@ def linearize(
         modes=oscillatory_modes(lam),
         equilibrium=eq,
     )
+    if out is not None:
+        from .report import write_linearization
+
+        write_linearization(lin, Path(out), input, output)
+    return lin
