@@ -127,6 +127,14 @@ typedef struct {
      * NULL when there are no such fields. Every new field of the model struct must be covered
      * by one of the three. */
     int (*check_state)(const void *m, char *msg, size_t msg_size);
+    /* Partial derivatives (NULL and 0: not provided): the value references of the model's
+     * differentiable unknowns (derivatives and continuous outputs) and of its knowns (states
+     * and inputs); jacobian fills J[i * n_jac_knowns + j] = d unknown_i / d known_j at the
+     * current time, states, inputs and discrete state (at most 1024 entries):
+     * FMU_MODEL_OK or FMU_MODEL_NONFINITE. */
+    int n_jac_unknowns, n_jac_knowns;
+    const unsigned int *jac_unknowns, *jac_knowns;
+    int (*jacobian)(void *m, double *J);
 } fmu_model_t;
 
 /* Defined by the model adapter linked into the FMU binary. */
