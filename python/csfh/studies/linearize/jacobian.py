@@ -5,7 +5,9 @@ implementations, chosen by what the FMU declares.
   and outputs (four evaluations per column). The steps follow the model's own length and speed
   scales: in the contact mode 1e-3 of the indentation, so that no probe leaves the contact, whose
   force is non-smooth at zero indentation (docs/model.md §10.3); in flight 1e-3 of the
-  clearance; speeds 1e-3 of friction.v0, inside the dead zone of Eq. (5.1) at rest. Truncation
+  clearance or, if smaller, of the deflection |r| (the peak stress |sigma| is homogeneous of
+  degree one in it, §14.2) and of the eccentricity |e| (the gap (3.1) bends on that scale);
+  speeds 1e-3 of friction.v0, inside the dead zone of Eq. (5.1) at rest. Truncation
   (h/l)^4 and round-off eps l/h then both stay near 1e-12 relative.
 * `DirectionalDerivatives`: the FMU's fmi2GetDirectionalDerivative, one seed per state or
   input, where the model description declares providesDirectionalDerivative="true".
@@ -126,9 +128,11 @@ def fd_steps(plant: Plant, x: np.ndarray, u: np.ndarray) -> np.ndarray:
     """The step of each state and input (module docstring)."""
     plant.evaluate(x, u)
     delta = plant.value("contact.R2") - plant.value("contact.R1")
-    length = delta
     if plant.in_contact() and plant.value("contact.indentation") > 0.0:
         length = plant.value("contact.indentation")
+    else:  # the deflection, or the eccentricity near the concentric point, if smaller
+        e = delta - plant.value("contact.gap")
+        length = min(delta, max(float(np.hypot(x[0], x[1])), e, 1e-3 * delta))
     speed = max(plant.value("friction.v0"), 1e-9 * delta)
     R1 = plant.value("contact.R1")
     scales = np.array(

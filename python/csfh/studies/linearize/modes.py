@@ -11,8 +11,10 @@ import numpy as np
 
 OSCILLATORY = 1e-6
 """An eigenvalue is one of an oscillatory pair when its imaginary part exceeds this fraction of
-the largest |eigenvalue| (a double zero of a rigid motion splits by round-off into a pair far
-below it)."""
+the largest |eigenvalue| and sqrt(NOISE max|A_ij|): the double zero of a rigid motion (a free
+rotation or a body in flight without flexure) splits under an error eps of A into +-sqrt(eps),
+and the Jacobians' error is ~1e-10 of their largest entries."""
+NOISE = 1e-9
 
 
 @dataclass(frozen=True)
@@ -31,10 +33,11 @@ def eigenvalues(A: np.ndarray) -> np.ndarray:
     return lam[np.lexsort((lam.imag, np.abs(lam)))]
 
 
-def oscillatory_modes(lam: np.ndarray) -> list[Mode]:
-    """One mode per complex pair (its eigenvalue of positive imaginary part), by ascending
-    natural frequency."""
-    scale = float(np.max(np.abs(lam))) if lam.size else 0.0
+def oscillatory_modes(lam: np.ndarray, A: np.ndarray) -> list[Mode]:
+    """One mode per complex pair of A's eigenvalues `lam` (its eigenvalue of positive imaginary
+    part), by ascending natural frequency."""
+    largest = float(np.max(np.abs(lam))) if lam.size else 0.0
+    floor = math.sqrt(NOISE * float(np.max(np.abs(A)))) if A.size else 0.0
     modes = [
         Mode(
             frequency_hz=abs(z) / (2 * math.pi),
@@ -42,7 +45,7 @@ def oscillatory_modes(lam: np.ndarray) -> list[Mode]:
             damping_ratio=-z.real / abs(z),
         )
         for z in lam
-        if z.imag > OSCILLATORY * scale
+        if z.imag > max(OSCILLATORY * largest, floor)
     ]
     return sorted(modes, key=lambda m: m.frequency_hz)
 

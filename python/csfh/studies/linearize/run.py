@@ -136,7 +136,7 @@ def linearize(
         state_derivatives=xdot,
         in_contact=contact,
         eigenvalues=lam,
-        modes=oscillatory_modes(lam),
+        modes=oscillatory_modes(lam, jac.A),
         equilibrium=eq,
     )
     if out is not None:
