@@ -18,6 +18,7 @@ from csfh_command import run_csfh
 
 import csfh
 from csfh.errors import ParameterError, SimulationError
+from csfh.model.instance import nominal_values
 from csfh.model.scene import load_scene, scene_from_dict
 from csfh.studies.linearize.jacobian import (
     INPUTS,
@@ -128,6 +129,24 @@ def test_a_time_of_a_run_is_that_runs_state() -> None:
     expected = [tr[c][-1] for c in ("x", "y", "theta", "vx", "vy", "omega")]
     np.testing.assert_allclose(lin.operating_point, expected, rtol=1e-9, atol=1e-15)
     assert lin.at == "t = 0.05 s"
+
+
+def test_a_time_inside_a_contact_keeps_the_runs_onset_rate() -> None:
+    """Inside the central scene's first impact the linearization is in contact, and its damping
+    is the LN law's (4.1) with the run's own onset rate (0.77 m/s, not the floor v_min = 1e-3
+    m/s a fresh start at rest would take): d(dvy/dt)/dvy = -F_el(rho) xi / (rho'- m), with
+    F_el = K rho^1.5 (4.3) at the indentation rho = -y - delta."""
+    scene = load_scene("central")
+    records = csfh.simulate(scene, "LN_spheres", stop_time=0.1).contact_records
+    t_on, t_off = records["t_onset"][0], records["t_release"][0]
+    v_on = records["onset_speed"][0]
+    lin = csfh.linearize(scene, "LN_spheres", at=0.7 * t_on + 0.3 * t_off, jacobian="fd")
+    assert lin.in_contact
+    rho = -lin.operating_point[1] - 0.02
+    cr = nominal_values(scene, ["contact.cr"])["contact.cr"]
+    damping = oracles.k_spheres() * rho**1.5 * oracles.xi("LN_spheres", cr) / v_on
+    assert lin.A[4, 4] == pytest.approx(-damping / M1, rel=1e-6)
+    assert v_on > 100 * 1e-3
 
 
 def test_no_equilibrium_is_refused() -> None:
