@@ -75,11 +75,11 @@ class Plant:
     def __init__(self, fmu: Any, outputs: Sequence[str] = OUTPUTS) -> None:
         self.fmu = fmu
         self.outputs = tuple(outputs)
-        self._der_vrs = [_vr(f"der({n})") for n in STATES]
-        self._out_vrs = [_vr(n) for n in self.outputs]
-        self._in_vrs = [_vr(n) for n in INPUTS]
+        self.der_vrs = [_vr(f"der({n})") for n in STATES]
+        self.output_vrs = [_vr(n) for n in self.outputs]
+        self.input_vrs = [_vr(n) for n in INPUTS]
         self.x = self._get_states()
-        self.u = np.array(fmu.getReal(self._in_vrs), dtype=float)
+        self.u = np.array(fmu.getReal(self.input_vrs), dtype=float)
 
     def _get_states(self) -> np.ndarray:
         x = np.empty(len(STATES))
@@ -90,14 +90,14 @@ class Plant:
         """Move the instance to states x and inputs u (the contact mode stays)."""
         x = np.ascontiguousarray(x, dtype=float)
         self.fmu.setContinuousStates(x.ctypes.data_as(_dp), len(STATES))
-        self.fmu.setReal(self._in_vrs, [float(v) for v in u])
+        self.fmu.setReal(self.input_vrs, [float(v) for v in u])
 
     def evaluate(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
         """[derivatives, outputs] at (x, u)."""
         self.set_point(x, u)
         xdot = np.empty(len(STATES))
         self.fmu.getDerivatives(xdot.ctypes.data_as(_dp), len(STATES))
-        return np.concatenate([xdot, self.fmu.getReal(self._out_vrs)])
+        return np.concatenate([xdot, self.fmu.getReal(self.output_vrs)])
 
     def value(self, name: str) -> float:
         """An FMU variable at the instance's current point."""
@@ -172,8 +172,8 @@ class DirectionalDerivatives:
 
     def jacobians(self, plant: Plant, x: np.ndarray, u: np.ndarray) -> Jacobians:
         plant.set_point(x, u)
-        unknowns = [*plant._der_vrs, *plant._out_vrs]
-        knowns = [_vr(n) for n in STATES] + plant._in_vrs
+        unknowns = [*plant.der_vrs, *plant.output_vrs]
+        knowns = [_vr(n) for n in STATES] + plant.input_vrs
         columns = [
             np.array(plant.fmu.getDirectionalDerivative(unknowns, [k], [1.0]), dtype=float)
             for k in knowns
