@@ -128,7 +128,7 @@ def test_a_time_of_a_run_is_that_runs_state() -> None:
     tr = csfh.simulate(scene, "LN_cylinders", stop_time=0.05)
     expected = [tr[c][-1] for c in ("x", "y", "theta", "vx", "vy", "omega")]
     np.testing.assert_allclose(lin.operating_point, expected, rtol=1e-9, atol=1e-15)
-    assert lin.at == "t = 0.05 s"
+    assert lin.at == "t = 0.05 s" and lin.to_json()["time"] == 0.05
 
 
 def test_a_time_inside_a_contact_keeps_the_runs_onset_rate() -> None:

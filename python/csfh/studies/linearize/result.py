@@ -28,6 +28,7 @@ class Linearization:
     eigenvalues: np.ndarray
     modes: list[Mode]
     equilibrium: Equilibrium | None = None
+    time: float = 0.0  # s, the FMU's time at the point (that of the run for --at TIME)
     states: tuple[str, ...] = STATES
     inputs: tuple[str, ...] = INPUTS
     outputs: tuple[str, ...] = OUTPUTS
@@ -62,6 +63,7 @@ class Linearization:
             "scene": self.scene,
             "model": self.model,
             "at": self.at,
+            "time": self.time,
             "jacobian": self.jacobian,
             "contact_mode": "contact" if self.in_contact else "flight",
             "states": list(self.states),

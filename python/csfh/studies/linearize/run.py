@@ -138,6 +138,7 @@ def linearize(
         eigenvalues=lam,
         modes=oscillatory_modes(lam, jac.A),
         equilibrium=eq,
+        time=time,
     )
     if out is not None:
         from .report import write_linearization
