@@ -9,7 +9,8 @@ solve runs in one mode, the one the FMU sets at the start from the gap. An equil
 consistent when its gap agrees with its mode (flight: gap > 0; contact: indentation > 0). When
 it does not, the solve starts again in the other mode: from a point just inside the bore on the
 way to the inconsistent flight solution (or, when there is no flight solution, along the
-unbalanced force), or from the contact solution that left the bore."""
+unbalanced force), or from the contact solution that left the bore. In contact the unknowns
+are polar coordinates of the eccentricity (`BorePolar`), in flight q itself."""
 
 from __future__ import annotations
 
@@ -26,9 +27,9 @@ from .jacobian import OUTPUTS, JacobianSource, Plant, fd_steps
 
 MAX_ITERATIONS = 60
 TOLERANCE = 1e-9
-"""Convergence: the last Newton step below this fraction of the model's length scale in every
-coordinate (1e3 x the finite-difference steps: the indentation in contact, the clearance in
-flight)."""
+"""Convergence: the last Newton step below this fraction of each coordinate's length scale (in
+contact the indentation for the radius, the clearance along the bore and for the rotation; in
+flight 1e3 x the finite-difference steps: the clearance, or the deflection if smaller)."""
 MAX_STEP = 1e3
 """A Newton step longer than this many length scales ends the solve unconverged: the stiffness
 is round-off (a free flight under a constant force)."""
