@@ -107,8 +107,15 @@ typedef struct {
     /* Fill the outputs at the current time, state and inputs: FMU_MODEL_OK, FMU_MODEL_WARNING
      * (message) or FMU_MODEL_NONFINITE (message). */
     int (*outputs)(void *m, char *msg, size_t msg_size);
-    /* Add co-simulation integrator steps to the model's counter (may be NULL). */
+    /* Add co-simulation integrator steps, and Jacobians formed, to the model's counters (may be
+     * NULL). */
     void (*add_integrator_steps)(void *m, long steps);
+    void (*add_jacobians)(void *m, long jacobians);
+    /* Co-simulation's BDF: the Jacobian J[i + j * n_states] = d xdot_i / d x_j at (t, x) as its
+     * Newton matrix, where cs_jacobian (may be NULL) says so for the model's parameters (else
+     * difference quotients); FMU_MODEL_OK or FMU_MODEL_NONFINITE. */
+    int (*cs_jacobian)(const void *m);
+    int (*state_jacobian)(void *m, double t, const double *x, double *A);
     /* The co-simulation method, FMU_CS_AUTO, FMU_CS_BDF, FMU_CS_ADAMS or FMU_CS_RK45 (NULL:
      * BDF). */
     int (*cs_method)(const void *m);

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmi2_calls import ERROR
+from fmi2_calls import ERROR, MakeFmu
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Model, FMU2Slave
+from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Model, FMU3Slave, fmi3Float64
 from fmpy.model_description import ModelDescription
 
@@ -78,14 +78,10 @@ INPUT_VALUES = dict(zip(INPUTS, [3.0, -2.0, 0.4, 1.5, -0.7], strict=True))
 # FMI 2.0
 
 
-def me2(md: ModelDescription, directory: str, vr: dict[str, int], start: dict[str, float]):
-    fmu = FMU2Model(
-        guid=md.guid,
-        unzipDirectory=directory,
-        modelIdentifier=md.modelExchange.modelIdentifier,
-        instanceName="dd2",
-    )
-    fmu.instantiate()
+def me2(make_fmu: MakeFmu, vr: dict[str, int], start: dict[str, float]) -> FMU2Model:
+    """A model-exchange instance (the tests' own callbacks: fmu_instances.py) in continuous-time
+    mode at `start`, with the inputs of INPUT_VALUES."""
+    fmu, _ = make_fmu("ME")
     fmu.setReal([vr[k] for k in start], list(start.values()))
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
@@ -98,11 +94,11 @@ def me2(md: ModelDescription, directory: str, vr: dict[str, int], start: dict[st
 
 @pytest.mark.parametrize("case", list(CASES))
 def test_fmi2_model_exchange_matches_differences(
-    model_description: ModelDescription, unzipped: str, vr: dict[str, int], case: str
+    model_description: ModelDescription, make_fmu: MakeFmu, vr: dict[str, int], case: str
 ) -> None:
     md = model_description
     unknowns = DERIVATIVES + continuous_outputs(md)
-    fmu = me2(md, unzipped, vr, CASES[case])
+    fmu = me2(make_fmu, vr, CASES[case])
     try:
         assert fmu.getBoolean([vr["contact.active"]])[0] == (case == "contact")
         x0 = np.array(fmu.getReal([vr[s] for s in STATES]))
@@ -148,7 +144,6 @@ def test_fmi2_model_exchange_matches_differences(
         )
     finally:
         fmu.terminate()
-        fmu.freeInstance()
 
 
 def jacobian_me2(fmu: FMU2Model, vr: dict[str, int], unknowns: list[str]) -> np.ndarray:
@@ -159,7 +154,7 @@ def jacobian_me2(fmu: FMU2Model, vr: dict[str, int], unknowns: list[str]) -> np.
 
 
 def test_model_structure_matches_the_jacobian(
-    model_description: ModelDescription, unzipped: str, vr: dict[str, int]
+    model_description: ModelDescription, make_fmu: MakeFmu, vr: dict[str, int]
 ) -> None:
     """Every derivative and output depends on the knowns its ModelStructure entry names, and on
     no other (an entry outside the dependencies is 0 in flight and in contact); a "constant"
@@ -172,12 +167,9 @@ def test_model_structure_matches_the_jacobian(
     unknowns = [u.variable.name for u in structure]
     jacobians = []
     for case in CASES:
-        fmu = me2(md, unzipped, vr, CASES[case])
-        try:
-            jacobians.append(jacobian_me2(fmu, vr, unknowns))
-        finally:
-            fmu.terminate()
-            fmu.freeInstance()
+        fmu = me2(make_fmu, vr, CASES[case])
+        jacobians.append(jacobian_me2(fmu, vr, unknowns))
+        fmu.terminate()
     columns = {name: j for j, name in enumerate(STATES + INPUTS)}
     for i, u in enumerate(structure):
         named = {d.name for d in u.dependencies}
@@ -190,20 +182,14 @@ def test_model_structure_matches_the_jacobian(
 
 
 def test_fmi2_co_simulation_outputs_by_inputs(
-    model_description: ModelDescription, unzipped: str, vr: dict[str, int]
+    model_description: ModelDescription, make_fmu: MakeFmu, vr: dict[str, int]
 ) -> None:
     """Co-simulation: the outputs' derivatives with respect to the inputs (the frame's
     acceleration follows a_base, nothing else depends on an input directly), equal to the
     differences of getReal after setReal; derivatives and states are refused."""
     md = model_description
     outputs = continuous_outputs(md)
-    fmu = FMU2Slave(
-        guid=md.guid,
-        unzipDirectory=unzipped,
-        modelIdentifier=md.coSimulation.modelIdentifier,
-        instanceName="dd2cs",
-    )
-    fmu.instantiate()
+    fmu, _ = make_fmu("CS")
     try:
         start = CASES["contact"]
         fmu.setReal([vr[k] for k in start], list(start.values()))
@@ -233,7 +219,6 @@ def test_fmi2_co_simulation_outputs_by_inputs(
             fmu.getDirectionalDerivative([vr["contact.F_N"]], [vr["body1.x"]], [1.0])
     finally:
         fmu.terminate()
-        fmu.freeInstance()
 
 
 def test_fmi2_bad_arguments_are_refused_with_a_message(make_fmu, vr: dict[str, int]) -> None:
@@ -277,6 +262,16 @@ def test_fmi2_bad_arguments_are_refused_with_a_message(make_fmu, vr: dict[str, i
 # FMI 3.0
 
 
+class Log:
+    """FMI 3.0 log lines (the instance's own logger, kept alive with the instance)."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+
+    def __call__(self, env: object, status: int, category: bytes, message: bytes) -> None:
+        self.lines.append(message.decode())
+
+
 def refs3(md: ModelDescription) -> dict[str, int]:
     return {v.name: v.valueReference for v in md.modelVariables}
 
@@ -294,7 +289,7 @@ def test_fmi3_model_exchange_directional_and_adjoint(
         modelIdentifier=md3.modelExchange.modelIdentifier,
         instanceName="dd3",
     )
-    fmu.instantiate()
+    fmu.instantiate(logMessage=Log())
     try:
         start = CASES[case]
         fmu.setFloat64([vr[k] for k in start], list(start.values()))
@@ -350,7 +345,7 @@ def test_fmi3_co_simulation_outputs_by_inputs(md3: ModelDescription, unzipped3: 
         modelIdentifier=md3.coSimulation.modelIdentifier,
         instanceName="dd3cs",
     )
-    fmu.instantiate()
+    fmu.instantiate(logMessage=Log())
     try:
         fmu.enterInitializationMode(startTime=0.0)
         fmu.exitInitializationMode()

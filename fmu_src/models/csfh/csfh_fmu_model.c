@@ -121,11 +121,42 @@ static int cs_method(const void *f)
     }
 }
 
+/* counter += n, saturating at INT_MAX */
+static void add_saturating(int *counter, long n)
+{
+    const long room = 0x7fffffffL - *counter;
+    *counter += (int)(n < room ? n : room);
+}
+
 static void add_integrator_steps(void *fv, long steps)
 {
-    csfh_fmu_t *f = (csfh_fmu_t *)fv;
-    const long room = 0x7fffffffL - f->integrator_steps; /* the counter saturates at INT_MAX */
-    f->integrator_steps += (int)(steps < room ? steps : room);
+    add_saturating(&((csfh_fmu_t *)fv)->integrator_steps, steps);
+}
+
+static void add_jacobians(void *fv, long jacobians)
+{
+    add_saturating(&((csfh_fmu_t *)fv)->jacobian_evaluations, jacobians);
+}
+
+static int cs_jacobian(const void *f)
+{
+    return ((const csfh_fmu_t *)f)->cs_analytic_jacobian;
+}
+
+/* d xdot / d x of csfh_model_derivatives (docs/model.md §15.1), column-major */
+static int state_jacobian(void *f, double t, const double *x, double *J)
+{
+    (void)t; /* the pulse of §14.8 depends on time only */
+    double dx[6][6], du[6][CSFH_N_JAC_INPUTS];
+    if (csfh_model_rhs_jacobian(MODEL(f), x, dx, du) != CSFH_OK) {
+        return FMU_MODEL_NONFINITE;
+    }
+    for (int i = 0; i < 6; i++) {
+        for (int j = 0; j < 6; j++) {
+            J[i + 6 * j] = dx[i][j];
+        }
+    }
+    return FMU_MODEL_OK;
 }
 
 /* Restored FMU state: the fields that are not stored table variables (checked by the glue:
@@ -144,7 +175,8 @@ static int check_state(const void *fv, char *msg, size_t msg_size)
                   {"diagnostics.flexure_evaluations", m->counters.flexure},
                   {"diagnostics.contact_evaluations", m->counters.contact},
                   {"diagnostics.friction_evaluations", m->counters.friction},
-                  {"diagnostics.integrator_steps", f->integrator_steps}};
+                  {"diagnostics.integrator_steps", f->integrator_steps},
+                  {"diagnostics.jacobian_evaluations", f->jacobian_evaluations}};
     for (size_t i = 0; i < sizeof(counts) / sizeof(counts[0]); i++) {
         if (counts[i].value < 0) {
             snprintf(msg, msg_size, "%s = %d is negative", counts[i].name, counts[i].value);
@@ -265,6 +297,9 @@ const fmu_model_t fmu_model = {
     .event_update = event_update,
     .outputs = outputs,
     .add_integrator_steps = add_integrator_steps,
+    .add_jacobians = add_jacobians,
+    .cs_jacobian = cs_jacobian,
+    .state_jacobian = state_jacobian,
     .cs_method = cs_method,
     .step_memory = sizeof(csfh_step_peaks_t),
     .comm_step_begins = csfh_peaks_begin,
