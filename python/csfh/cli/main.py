@@ -23,7 +23,8 @@ def build_parser() -> Any:
     parser = common.Parser(prog="csfh", description=__doc__, formatter_class=common.HelpFormatter)
     parser.add_argument("--version", action="version", version=f"csfh {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for module in (run, accuracy, sweep, shock, design, cosim, linearize):  # each defines its commands
+    # each module defines its commands
+    for module in (run, accuracy, sweep, shock, design, cosim, linearize):
         module.register(sub)
     return parser
 
