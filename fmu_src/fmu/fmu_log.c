@@ -4,7 +4,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "fmu_instance.h"
+#include "fmu_log.h"
+#include "fmu_types.h"
 
 const char *fmu_category_name(unsigned int category)
 {

@@ -3,7 +3,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fmu_instance.h"
+#include "fmu_log.h"
+#include "fmu_state.h"
+#include "fmu_types.h"
 
 #define FMU_STATE_MAGIC 0x48465343u /* "CSFH" */
 #define FMU_STATE_VERSION 4u /* raised with every change of the snapshot's layout */
