@@ -4,7 +4,9 @@
 #                                    Ubuntu 20.04 and later)
 #                           win64    x86_64-windows-gnu (Universal CRT, i.e. Windows 10 and later,
 #                                    or the redistributable on older Windows)
-#                           darwin64 x86_64-macos and aarch64-macos, one universal (fat) binary
+#                           darwin64 x86_64-macos and aarch64-macos, one universal (fat) binary,
+#                                    for macOS 11 and later (the first with arm64; zig 0.17.1's
+#                                    default is macOS 15)
 #                  = host   the host compiler's linux64 binary only (no zig needed)
 #                  = auto   all where zig is found, else host (the default)
 #   CSFH_ZIG                the zig executable (default: the ziglang Python package of the Python
@@ -12,7 +14,8 @@
 #
 # Each platform (each darwin slice) is a cross build of this same project in
 # build/platforms/<slice> (CSFH_CROSS_BUILD: SUNDIALS, the FMU binaries, the test importers),
-# with the same SUNDIALS source, the same FMI headers and the same flags, run by ExternalProject.
+# with the same SUNDIALS source, the same FMI headers and the same flags, run by ExternalProject;
+# each also makes the harness's ctypes libraries (cmake/ctypes.cmake) in <cross build>/lib/.
 # Provides csfh_platform_binaries(OUT MODEL_IDENTIFIER id): "platform=file[,file]" entries for
 # tools/fmu_package.py and the targets that build them (CSFH_PLATFORM_TARGETS).
 
@@ -56,8 +59,8 @@ set(CSFH_PLATFORMS_BUILT ${_platforms})
 set(_csfh_slices
   "linux64|linux64|x86_64-linux-gnu.2.17|Linux|x86_64"
   "win64|win64|x86_64-windows-gnu|Windows|AMD64"
-  "darwin64-x86_64|darwin64|x86_64-macos|Darwin|x86_64"
-  "darwin64-arm64|darwin64|aarch64-macos|Darwin|arm64")
+  "darwin64-x86_64|darwin64|x86_64-macos.11.0|Darwin|x86_64"
+  "darwin64-arm64|darwin64|aarch64-macos.11.0|Darwin|arm64")
 set(CSFH_PLATFORM_TARGETS)
 
 # the FMI 3.0 platform tuple of a slice
@@ -111,11 +114,27 @@ if(_platforms STREQUAL "all")
       _csfh_fmu3_tuple(tuple ${slice})
       list(APPEND byproducts ${CMAKE_BINARY_DIR}/platforms/${slice}/binaries3/${id}/${tuple}/${id}${suffix})
     endforeach()
+    # the ctypes libraries (cmake/ctypes.cmake) in <cross build>/lib/
+    csfh_ctypes_file_names(libraries ${platform})
+    foreach(library IN LISTS libraries)
+      list(APPEND byproducts ${CMAKE_BINARY_DIR}/platforms/${slice}/lib/${library})
+    endforeach()
+    # a cross build not configured for this target triple (CSFH_CROSS_TRIPLE, in its cache) is
+    # configured afresh: on a compiler change CMake drops the cache's variables, the -D
+    # arguments included
+    set(cache ${CMAKE_BINARY_DIR}/platforms/${slice}/CMakeCache.txt)
+    if(EXISTS ${cache})
+      file(STRINGS ${cache} configured REGEX "^CSFH_CROSS_TRIPLE:")
+      if(NOT configured MATCHES "=${triple}$")
+        file(REMOVE ${cache})
+      endif()
+    endif()
     ExternalProject_Add(csfh_platform_${slice}
       SOURCE_DIR ${PROJECT_SOURCE_DIR}
       BINARY_DIR ${CMAKE_BINARY_DIR}/platforms/${slice}
       CMAKE_ARGS
-        -DCSFH_CROSS_BUILD=ON -DCSFH_BUILD_TESTS=OFF -DCSFH_BUILD_BENCHMARKS=OFF
+        -DCSFH_CROSS_BUILD=ON -DCSFH_CROSS_TRIPLE=${triple} -DCSFH_BUILD_TESTS=OFF
+        -DCSFH_BUILD_BENCHMARKS=OFF
         -DCMAKE_BUILD_TYPE=Release
         -DCMAKE_SYSTEM_NAME=${system} -DCMAKE_SYSTEM_PROCESSOR=${processor}
         -DCMAKE_C_COMPILER=${_wrappers}/${triple}-cc
@@ -130,6 +149,26 @@ if(_platforms STREQUAL "all")
       USES_TERMINAL_BUILD ON)
     list(APPEND CSFH_PLATFORM_TARGETS csfh_platform_${slice})
   endforeach()
+
+  # darwin64's ctypes libraries as universal (x86_64 + arm64) files, as the FMU binary:
+  # build/platforms/darwin64/lib/ (the macOS wheel's, tools/build_wheels.sh)
+  csfh_ctypes_file_names(libraries darwin64)
+  set(fat_libraries)
+  foreach(library IN LISTS libraries)
+    set(fat ${CMAKE_BINARY_DIR}/platforms/darwin64/lib/${library})
+    set(thin ${CMAKE_BINARY_DIR}/platforms/darwin64-x86_64/lib/${library}
+             ${CMAKE_BINARY_DIR}/platforms/darwin64-arm64/lib/${library})
+    add_custom_command(
+      OUTPUT ${fat}
+      COMMAND ${CMAKE_COMMAND} -E make_directory ${CMAKE_BINARY_DIR}/platforms/darwin64/lib
+      COMMAND Python3::Interpreter ${PROJECT_SOURCE_DIR}/tools/macho_fat.py ${fat} ${thin}
+      DEPENDS csfh_platform_darwin64-x86_64 csfh_platform_darwin64-arm64 ${thin}
+              ${PROJECT_SOURCE_DIR}/tools/macho_fat.py
+      COMMENT "Joining the darwin64 slices of ${library}"
+      VERBATIM)
+    list(APPEND fat_libraries ${fat})
+  endforeach()
+  add_custom_target(csfh_darwin64_libraries ALL DEPENDS ${fat_libraries})
 endif()
 
 # "platform=file[,file...]" for tools/fmu_package.py: the binaries of model `id` (host_file: the

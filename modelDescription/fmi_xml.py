@@ -21,8 +21,9 @@ from spec import Spec, SpecError, dependencies, parse_range, quantity_of, states
 Variable = dict[str, Any]
 Ref = Callable[[str], int]
 """How the model structure refers to a variable, by name (FMI 2.0: index, FMI 3.0: vr)."""
-Deps = Callable[[list[str]], str]
-"""The dependencies attribute of a list of names."""
+Deps = Callable[["Unknown"], dict[str, str]]
+"""The dependencies (and dependenciesKind, where the variable gives its kinds) attributes of an
+unknown."""
 LOG_EVENTS_DEFAULT = "Contact onsets and releases, mode changes"
 BASE_UNITS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
 EXPERIMENT_KEYS = ("startTime", "stopTime", "tolerance", "stepSize")
@@ -100,6 +101,7 @@ class Unknown:
     kind: str
     variable: Variable
     depends: list[str]
+    kinds: dict[str, str] | None = None  # depends_kind: name -> kind, the rest "dependent"
 
 
 def _initial_dependencies(spec: Spec, v: Variable) -> list[str]:
@@ -128,10 +130,14 @@ def unknowns(spec: Spec) -> list[Unknown]:
     variables = spec["variables"]
     by_name = {v["name"]: v for v in variables}
     out = [
-        Unknown("output", v, dependencies(spec, v)) for v in variables if v["causality"] == "output"
+        Unknown("output", v, dependencies(spec, v), v.get("depends_kind"))
+        for v in variables
+        if v["causality"] == "output"
     ]
     out += [
-        Unknown("derivative", v, dependencies(spec, v)) for v in variables if "derivative_of" in v
+        Unknown("derivative", v, dependencies(spec, v), v.get("depends_kind"))
+        for v in variables
+        if "derivative_of" in v
     ]
     out += [
         Unknown("initial", v, _initial_dependencies(spec, v))
@@ -154,6 +160,7 @@ class Flavour:
     token: str  # the root's attribute of the GUID
     prefix: str  # of the status names in the log categories
     model_exchange: dict[str, str]
+    derivatives: Callable[[Spec], dict[str, str]]  # the capability flags of both interfaces
     root_extra: Callable[[Spec], dict[str, str]]
     cosimulation: Callable[[Spec], dict[str, str]]
     source_files: bool  # FMI 2.0 lists them in the interfaces; FMI 3.0 in buildDescription.xml
@@ -228,9 +235,7 @@ def _structure2(parent: ET.Element, entries: list[Unknown], deps: Deps, ref: Ref
             continue
         section = ET.SubElement(parent, tag)
         for u in selected:
-            ET.SubElement(
-                section, "Unknown", index=str(ref(u.variable["name"])), dependencies=deps(u.depends)
-            )
+            ET.SubElement(section, "Unknown", {"index": str(ref(u.variable["name"]))} | deps(u))
 
 
 FMI3_UNKNOWN = {
@@ -244,15 +249,33 @@ FMI3_UNKNOWN = {
 def _structure3(parent: ET.Element, entries: list[Unknown], deps: Deps, ref: Ref) -> None:
     for u in entries:
         ET.SubElement(
-            parent,
-            FMI3_UNKNOWN[u.kind],
-            valueReference=str(ref(u.variable["name"])),
-            dependencies=deps(u.depends),
+            parent, FMI3_UNKNOWN[u.kind], {"valueReference": str(ref(u.variable["name"]))} | deps(u)
         )
 
 
 def _cosimulation2(spec: Spec) -> dict[str, str]:
-    return {k: boolean(v) for k, v in spec["cosimulation"].items()}
+    return {k: boolean(v) for k, v in spec["cosimulation"].items()} | _derivatives2(spec)
+
+
+def _derivative_flags(spec: Spec) -> tuple[bool, bool]:
+    """[partial_derivatives]: (directional, adjoint), both interfaces; False when absent."""
+    d = spec.get("partial_derivatives", {})
+    return bool(d.get("providesDirectionalDerivative", False)), bool(
+        d.get("providesAdjointDerivatives", False)
+    )
+
+
+def _derivatives2(spec: Spec) -> dict[str, str]:
+    """FMI 2.0 has the directional derivative only."""
+    return {"providesDirectionalDerivative": boolean(_derivative_flags(spec)[0])}
+
+
+def _derivatives3(spec: Spec) -> dict[str, str]:
+    directional, adjoint = _derivative_flags(spec)
+    return {
+        "providesDirectionalDerivatives": boolean(directional),
+        "providesAdjointDerivatives": boolean(adjoint),
+    }
 
 
 # [cosimulation] keys of FMI 2.0 and their FMI 3.0 names (None: not in FMI 3.0)
@@ -265,7 +288,6 @@ FMI3_CS_ATTRIBUTES = {
     "canNotUseMemoryManagementFunctions": None,
     "canGetAndSetFMUstate": "canGetAndSetFMUState",
     "canSerializeFMUstate": "canSerializeFMUState",
-    "providesDirectionalDerivative": "providesDirectionalDerivatives",
 }
 # what the FMI 3.0 front-end adds to co-simulation (fmu_src/fmu/fmi3/fmi3_glue.c): Event Mode, and
 # fmi3DoStep returning early at an event when the importer allows it
@@ -287,7 +309,8 @@ def _cosimulation3(spec: Spec) -> dict[str, str]:
             cs[name] = value
     cs.update(FMI3_CS_DEFAULT)
     cs.update(spec.get("fmi3_cosimulation", {}))
-    return {k: boolean(v) if isinstance(v, bool) else str(v) for k, v in cs.items()}
+    text = {k: boolean(v) if isinstance(v, bool) else str(v) for k, v in cs.items()}
+    return text | _derivatives3(spec)
 
 
 def _index(spec: Spec) -> dict[str, int]:
@@ -309,6 +332,7 @@ FLAVOURS = {
             "canNotUseMemoryManagementFunctions": "true",
             "completedIntegratorStepNotNeeded": "true",
         },
+        derivatives=_derivatives2,
         root_extra=lambda spec: {
             "numberOfEventIndicators": str(spec["model"]["numberOfEventIndicators"])
         },
@@ -328,6 +352,7 @@ FLAVOURS = {
             "canSerializeFMUState": "true",
             "needsCompletedIntegratorStep": "false",
         },
+        derivatives=_derivatives3,
         root_extra=lambda spec: {},
         cosimulation=_cosimulation3,
         source_files=False,
@@ -365,7 +390,7 @@ def _root(spec: Spec, f: Flavour, guid: str, epoch: int) -> ET.Element:
 def _interfaces(root: ET.Element, spec: Spec, f: Flavour, source_files: tuple[str, ...]) -> None:
     """<ModelExchange>, <CoSimulation>, with <SourceFiles> for a source FMU (FMI 2.0)."""
     mi = {"modelIdentifier": spec["model"]["modelIdentifier"]}
-    interfaces = [("ModelExchange", mi | f.model_exchange)]
+    interfaces = [("ModelExchange", mi | f.model_exchange | f.derivatives(spec))]
     if "cosimulation" in spec:
         interfaces.append(("CoSimulation", mi | f.cosimulation(spec)))
     for tag, attrs in interfaces:
@@ -431,8 +456,13 @@ def model_description(
     )
     _variables(root, spec, f, ref)
 
-    def deps(names: list[str]) -> str:
-        return " ".join(str(r) for r in sorted({ref[n] for n in names}))
+    def deps(u: Unknown) -> dict[str, str]:
+        by_ref = {ref[n]: n for n in u.depends}
+        order = sorted(by_ref)
+        out = {"dependencies": " ".join(str(r) for r in order)}
+        if u.kinds is not None:
+            out["dependenciesKind"] = " ".join(u.kinds.get(by_ref[r], "dependent") for r in order)
+        return out
 
     f.structure(ET.SubElement(root, "ModelStructure"), unknowns(spec), deps, ref.__getitem__)
     return serialize(root)

@@ -37,6 +37,10 @@ def parse_range(text: str) -> tuple[float, float, bool, bool]:
     return lo, hi, m.group(1) == "(", m.group(4) == ")"
 
 
+# the dependenciesKind values of FMI 2.0 (FMI 3.0 has the same and "independent")
+DEPENDENCY_KINDS = ("dependent", "constant", "fixed", "tunable", "discrete")
+
+
 def c_ident(name: str) -> str:
     """body1.x -> BODY1_X, der(body1.x) -> DER_BODY1_X, F_ext[1] -> F_EXT_1."""
     return re.sub(r"[^0-9A-Za-z]+", "_", name).strip("_").upper()
@@ -80,6 +84,12 @@ def _check_variable(v: dict[str, Any], enums: dict[str, Any], units: dict[str, A
         raise SpecError(f"{name}: unit {v['unit']} not declared")
     if "range" in v:
         parse_range(v["range"])
+    for dep, kind in v.get("depends_kind", {}).items():
+        if dep not in v.get("depends", []) or kind not in DEPENDENCY_KINDS:
+            raise SpecError(
+                f"{name}: depends_kind {dep} = {kind} (a name of depends, one of "
+                f"{', '.join(DEPENDENCY_KINDS)})"
+            )
 
 
 def _check_variables(spec: Spec) -> None:

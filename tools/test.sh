@@ -2,9 +2,10 @@
 # Run every test: the C unit tests under AddressSanitizer + UndefinedBehaviorSanitizer (ctest), the
 # FMI fuzz tests and the failed-allocation test (ASan + UBSan + LeakSanitizer), then the Python
 # tests (pytest, against the package installed in the virtual environment, with its FMU; they
-# run examples/ too), the documentation build (Sphinx, warnings as errors) and the linters. Sets
-# up first (tools/setup.sh, with the extras the tests use; it reinstalls only what changed), in
-# $CSFH_VENV, else .venv.
+# run examples/ too and check the platform wheels built from the same build/), the
+# documentation build (Sphinx, warnings as errors) and the linters. Sets
+# up first (tools/setup.sh --platforms all, with the extras the tests use: it builds every
+# platform once in build/ and reinstalls only what changed), in $CSFH_VENV, else .venv.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -13,7 +14,7 @@ stage() { printf '\n== %s  (at %dm%02ds)\n' "$1" $((SECONDS / 60)) $((SECONDS % 
 
 venv="${CSFH_VENV:-.venv}"
 stage "setup (tools/setup.sh)"
-tools/setup.sh --venv "$venv" --extras test,dask,cosim,docs,design
+tools/setup.sh --venv "$venv" --extras test,dask,cosim,docs,design --platforms all
 # shellcheck disable=SC1091
 . "$venv/bin/activate"
 unset PYTHONPATH  # the tests use the installed package
@@ -30,10 +31,12 @@ cmake --build build-fuzz --target csfh_fuzz
 ctest --test-dir build-fuzz -L fuzz --output-on-failure
 ctest --test-dir build-fuzz -L alloc --output-on-failure
 
-stage "FMU build tree (every platform: cmake/platforms.cmake)"
-cmake -S . -B build -G Ninja -DCSFH_PLATFORMS=all >/dev/null
+stage "the rest of build/ (the setup built every platform there: cmake/platforms.cmake)"
 cmake --build build
 ctest --test-dir build -L sundials --output-on-failure
+
+stage "wheels of every platform from build/ (tools/build_wheels.sh: nothing is compiled again)"
+CSFH_VENV="$venv" tools/build_wheels.sh build/wheels
 
 stage "Python tests"
 python3 -m pytest -q

@@ -187,6 +187,20 @@ fmu_status_t fmu_update_derivatives(fmu_instance_t *inst, const char *function);
 /* Outputs at the current state; logs a model warning once per instance. FMU_OK, FMU_WARNING or
  * FMU_ERROR (logged, prefixed with `function`). */
 fmu_status_t fmu_update_outputs(fmu_instance_t *inst, const char *function);
+/* A directional (adjoint 0: sensitivity = J seed) or adjoint (1: sensitivity = J^T seed)
+ * derivative, J = d unknowns / d knowns (fmu_derivatives.c); FMI 2.0 passes n_seed = n_knowns
+ * and n_sensitivity = n_unknowns. FMU_OK, or FMU_ERROR (logged: a bad argument, an unknown or a
+ * known the interface does not allow, a non-finite derivative, a model without jacobian). */
+typedef struct {
+    const unsigned int *unknowns, *knowns;
+    size_t n_unknowns, n_knowns;
+    const double *seed;
+    double *sensitivity;
+    size_t n_seed, n_sensitivity;
+    int adjoint;
+} fmu_derivative_call_t;
+fmu_status_t fmu_partial_derivatives(fmu_instance_t *inst, const char *function,
+                                     const fmu_derivative_call_t *call);
 /* Discrete-state update at an event, with logging; returns fmu_model.event_update's value. */
 int fmu_event_update(fmu_instance_t *inst);
 /* The continuous states as text, for messages. */

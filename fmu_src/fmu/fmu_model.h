@@ -107,8 +107,15 @@ typedef struct {
     /* Fill the outputs at the current time, state and inputs: FMU_MODEL_OK, FMU_MODEL_WARNING
      * (message) or FMU_MODEL_NONFINITE (message). */
     int (*outputs)(void *m, char *msg, size_t msg_size);
-    /* Add co-simulation integrator steps to the model's counter (may be NULL). */
+    /* Add co-simulation integrator steps, and Jacobians formed, to the model's counters (may be
+     * NULL). */
     void (*add_integrator_steps)(void *m, long steps);
+    void (*add_jacobians)(void *m, long jacobians);
+    /* Co-simulation's BDF: the Jacobian J[i + j * n_states] = d xdot_i / d x_j at (t, x) as its
+     * Newton matrix, where cs_jacobian (may be NULL) says so for the model's parameters (else
+     * difference quotients); FMU_MODEL_OK or FMU_MODEL_NONFINITE. */
+    int (*cs_jacobian)(const void *m);
+    int (*state_jacobian)(void *m, double t, const double *x, double *A);
     /* The co-simulation method, FMU_CS_AUTO, FMU_CS_BDF, FMU_CS_ADAMS or FMU_CS_RK45 (NULL:
      * BDF). */
     int (*cs_method)(const void *m);
@@ -127,6 +134,14 @@ typedef struct {
      * NULL when there are no such fields. Every new field of the model struct must be covered
      * by one of the three. */
     int (*check_state)(const void *m, char *msg, size_t msg_size);
+    /* Partial derivatives (NULL and 0: not provided): the value references of the model's
+     * differentiable unknowns (derivatives and continuous outputs) and of its knowns (states
+     * and inputs); jacobian fills J[i * n_jac_knowns + j] = d unknown_i / d known_j at the
+     * current time, states, inputs and discrete state (at most 1024 entries):
+     * FMU_MODEL_OK or FMU_MODEL_NONFINITE. */
+    int n_jac_unknowns, n_jac_knowns;
+    const unsigned int *jac_unknowns, *jac_knowns;
+    int (*jacobian)(void *m, double *J);
 } fmu_model_t;
 
 /* Defined by the model adapter linked into the FMU binary. */

@@ -14,7 +14,9 @@
 
 CSFH_INTERNAL_BEGIN
 
-#if defined(__GNUC__)
+#if defined(_WIN32)
+#define CSFH_API __declspec(dllexport)
+#elif defined(__GNUC__)
 #define CSFH_API __attribute__((visibility("default")))
 #else
 #define CSFH_API

@@ -52,6 +52,8 @@ if TYPE_CHECKING:
     from .runners.simulate import simulate
     from .studies.compare import Comparison, compare
     from .studies.design.run import design
+    from .studies.linearize.result import Linearization
+    from .studies.linearize.run import linearize
     from .trajectory import Trajectory
 
 _PUBLIC = {
@@ -60,6 +62,7 @@ _PUBLIC = {
     "CsBatchResult": "csfh.runners.cs_batch",
     "CsfhError": "csfh.errors",
     "IntegratorSettings": "csfh.model.scene",
+    "Linearization": "csfh.studies.linearize.result",
     "ParameterError": "csfh.errors",
     "Scene": "csfh.model.scene",
     "SceneError": "csfh.errors",
@@ -73,6 +76,7 @@ _PUBLIC = {
     "cs_batch": "csfh.runners.cs_batch",
     "design": "csfh.studies.design.run",
     "fmu_path": "csfh.paths",
+    "linearize": "csfh.studies.linearize.run",
     "load_scene": "csfh.model.scene",
     "moreau": "csfh.runners.moreau",
     "scene_from_dict": "csfh.model.scene",
@@ -88,6 +92,7 @@ __all__ = [
     "CsBatchResult",
     "CsfhError",
     "IntegratorSettings",
+    "Linearization",
     "ParameterError",
     "Scene",
     "SceneError",
@@ -102,6 +107,7 @@ __all__ = [
     "cs_batch",
     "design",
     "fmu_path",
+    "linearize",
     "load_scene",
     "moreau",
     "scene_from_dict",

@@ -19,6 +19,7 @@ the model, csfh or combdrive), else InstallError says what the file is instead."
 from __future__ import annotations
 
 import os
+import sys
 import zipfile
 from dataclasses import dataclass
 from functools import cache
@@ -110,6 +111,16 @@ def _check_fmu(path: Path, origin: str, model: str, version: tuple[int, int]) ->
         )
 
 
+def library_file(name: str) -> str:
+    """The file name of ctypes library `name` on this platform, as cmake/ctypes.cmake names it
+    (each platform's wheel carries its own: tools/wheel.py)."""
+    if sys.platform == "win32":
+        return f"{name}.dll"
+    if sys.platform == "darwin":
+        return f"lib{name}.dylib"
+    return f"lib{name}.so"
+
+
 ARTEFACTS = {
     "fmu": Artefact("csfh.fmu", "CSFH_FMU", model="csfh"),
     "fmu3": Artefact("fmi3/csfh.fmu", "CSFH_FMU3", model="csfh"),
@@ -117,8 +128,8 @@ ARTEFACTS = {
         "combdrive.fmu", "CSFH_COMBDRIVE_FMU", beside="CSFH_FMU", model="combdrive"
     ),
     "combdrive3": Artefact("fmi3/combdrive.fmu", beside="CSFH_FMU3", model="combdrive"),
-    "core": Artefact("libcsfh_core.so", "CSFH_CORE"),
-    "batch": Artefact("libcsfh_batch.so", "CSFH_BATCH"),
+    "core": Artefact(library_file("csfh_core"), "CSFH_CORE"),
+    "batch": Artefact(library_file("csfh_batch"), "CSFH_BATCH"),
 }
 """Every artefact the package uses, by key (`csfh info` lists them)."""
 
@@ -144,12 +155,12 @@ def combdrive_fmu_path(fmi_version: int = 2) -> Path:
 
 
 def core_library_path() -> Path:
-    """Path of libcsfh_core.so (the physics core for the harness): $CSFH_CORE, the package copy,
-    or build/libcsfh_core.so."""
+    """Path of libcsfh_core.so (csfh_core.dll, libcsfh_core.dylib: the physics core for the
+    harness): $CSFH_CORE, the package copy, or build/libcsfh_core.so."""
     return ARTEFACTS["core"].locate()[0]
 
 
 def batch_library_path() -> Path:
-    """Path of libcsfh_batch.so (the co-simulation loop and batch master): $CSFH_BATCH, the
-    package copy, or build/libcsfh_batch.so."""
+    """Path of libcsfh_batch.so (csfh_batch.dll, libcsfh_batch.dylib: the co-simulation loop and
+    the batch master): $CSFH_BATCH, the package copy, or build/libcsfh_batch.so."""
     return ARTEFACTS["batch"].locate()[0]

@@ -17,7 +17,7 @@ static cs_auto_window_t window(int stiff_method, double failed, double stiff, do
 
 static void test_trial_starts_where_the_nonstiff_integrator_struggles(void)
 {
-    const cs_counts_t zero = {0, 0, 0};
+    const cs_counts_t zero = {0, 0, 0, 0};
     cs_auto_t a;
     cs_auto_segment(&a, &zero, 0.0);
     char why[256];
@@ -38,7 +38,7 @@ static void test_trial_starts_where_the_nonstiff_integrator_struggles(void)
 
 static void test_stiff_integrator_is_kept_only_where_its_steps_are_longer(void)
 {
-    const cs_counts_t zero = {0, 0, 0};
+    const cs_counts_t zero = {0, 0, 0, 0};
     cs_auto_t a;
     char why[256];
     cs_auto_segment(&a, &zero, 0.0);
@@ -74,15 +74,15 @@ static void test_stiff_integrator_is_kept_only_where_its_steps_are_longer(void)
 
 static void test_no_decision_before_a_window_is_complete(void)
 {
-    const cs_counts_t zero = {0, 0, 0};
+    const cs_counts_t zero = {0, 0, 0, 0};
     cs_auto_t a;
     char why[256];
     cs_auto_segment(&a, &zero, 0.0);
-    const cs_counts_t some = {99, 50, 50};
+    const cs_counts_t some = {99, 50, 50, 0};
     CHECK_INT(cs_auto_step_end(&a, &some, 1e-2, "RK45", 0, "RK45", why, sizeof why),
               CS_AUTO_KEEP, "99 steps: no decision, whatever they were");
     CHECK_INT((int)a.at.steps, 0, "the window goes on");
-    const cs_counts_t window_done = {100, 50, 0};
+    const cs_counts_t window_done = {100, 50, 0, 0};
     CHECK_INT(cs_auto_step_end(&a, &window_done, 1e-2, "RK45", 0, "RK45", why, sizeof why),
               CS_AUTO_STIFF, "100 steps, half of them failed: try BDF");
     CHECK_CLOSE(a.nonstiff_h, 1e-4, 1e-15, "the mean step: the window's time over its steps");

@@ -32,6 +32,7 @@ CSFH_SOURCES = {
     "fmu_values.c",
     "fmu_state.c",
     "fmu_me.c",
+    "fmu_derivatives.c",
     "fmu_step.c",
     "cosimulation.c",
     "integration.c",
@@ -51,6 +52,7 @@ CSFH_SOURCES = {
     "csfh_normal_law.c",
     "csfh_friction.c",
     "csfh_model.c",
+    "csfh_jacobian.c",
     "csfh_vartable.c",
     "csfh_variables.c",
     "csfh_sundials_alloc.c",  # SUNDIALS allocates through it (sundials/csfh_sundials_alloc.h)

@@ -1127,11 +1127,26 @@ static void do_rare(instance_t *in)
         end(&c, "fmi2SetReal", st);
         break;
     case 2: {
-        double x = 0.0;
+        /* the time is no unknown; the model's own unknowns and knowns may be refused only by
+         * the state (or the interface: co-simulation knows inputs only) */
+        double x = 0.0, d[2] = {0.0, 0.0};
         c = begin(in, MUST_REJECT, PURE);
-        note("fmi2GetDirectionalDerivative");
+        note("fmi2GetDirectionalDerivative(time)");
         st = fmi2GetDirectionalDerivative(in->c, &vr, 1, &vr, 1, &x, &x);
         end(&c, "fmi2GetDirectionalDerivative", st);
+        if (fmu_model.n_jac_unknowns > 0) {
+            const fmi2ValueReference u[2] = {fmu_model.jac_unknowns[below(fmu_model.n_jac_unknowns)],
+                                             fmu_model.jac_unknowns[below(fmu_model.n_jac_unknowns)]};
+            const fmi2ValueReference k = fmu_model.jac_knowns[below(fmu_model.n_jac_knowns)];
+            const double seed = 1.0;
+            c = begin(in, may(legal(in, GET_OK)), EVALUATES);
+            note("fmi2GetDirectionalDerivative in %s", mstate_name[in->state]);
+            st = fmi2GetDirectionalDerivative(in->c, u, 2, &k, 1, &seed, d);
+            end(&c, "fmi2GetDirectionalDerivative", st);
+            if (st <= fmi2Warning) {
+                check_finite(d, 2, "fmi2GetDirectionalDerivative", st);
+            }
+        }
         break;
     }
     case 3: {

@@ -443,6 +443,33 @@ static void do_me(instance_t *in)
     judge(in, &p, "ME call", s, 0);
 }
 
+/* Directional or adjoint derivatives of the model's own unknowns by its knowns (refused in the
+ * wrong state or interface: co-simulation knows inputs only), sometimes with a hostile seed or
+ * sizes that do not match: a success is finite, a refusal changes nothing. */
+static void do_derivative(instance_t *in)
+{
+    if (fmu_model.n_jac_unknowns == 0) {
+        return;
+    }
+    const fmi3ValueReference u[2] = {fmu_model.jac_unknowns[below(fmu_model.n_jac_unknowns)],
+                                     fmu_model.jac_unknowns[below(fmu_model.n_jac_unknowns)]};
+    const fmi3ValueReference k = fmu_model.jac_knowns[below(fmu_model.n_jac_knowns)];
+    double seed[2] = {1.0, chance(0.1) ? hostile_double() : -0.5}, out[2] = {0.0, 0.0};
+    const int adjoint = chance(0.5);
+    const size_t n_seed = adjoint ? 2 : 1, n_out = adjoint ? 1 : 2;
+    const size_t n_out_given = chance(0.1) ? n_out + 1 : n_out;
+    probe_t p = probe(in);
+    const fmi3Status s =
+        adjoint ? fmi3GetAdjointDerivative(in->c, u, 2, &k, 1, seed, n_seed, out, n_out_given)
+                : fmi3GetDirectionalDerivative(in->c, u, 2, &k, 1, seed, n_seed, out, n_out_given);
+    note("%s -> %d", adjoint ? "fmi3GetAdjointDerivative" : "fmi3GetDirectionalDerivative",
+         (int)s);
+    if (s <= fmi3Warning) {
+        check_finite(out, n_out, "derivatives", s);
+    }
+    judge(in, &p, "derivative call", s, 1);
+}
+
 static void do_mode(instance_t *in)
 {
     probe_t p = probe(in);
@@ -648,8 +675,10 @@ static void sequence(int calls)
             } else {
                 do_me(in);
             }
-        } else if (r < 75) {
+        } else if (r < 72) {
             do_mode(in);
+        } else if (r < 75) {
+            do_derivative(in);
         } else {
             do_state(in);
         }

@@ -158,3 +158,25 @@ def test_interface_module_is_the_fmus_model_description(model: str) -> None:
         ]
         assert items == expected_items
     assert len(md.typeDefinitions) == len(interface.enumerations)
+
+
+@pytest.mark.parametrize(
+    ("kinds", "needle"),
+    [
+        ('{ "body1.y" = "constant" }', "depends_kind body1.y = constant"),  # not a dependency
+        ('{ "body1.vx" = "linear" }', "depends_kind body1.vx = linear"),  # not a kind
+    ],
+)
+def test_a_bad_dependency_kind_is_refused(tmp_path: Path, kinds: str, needle: str) -> None:
+    """depends_kind names dependencies of its variable, each with a kind FMI knows."""
+    text = (ROOT / "modelDescription" / "variables.toml").read_text("utf-8")
+    good = 'depends = ["body1.vx"]\ndepends_kind = { "body1.vx" = "constant" }'
+    assert good in text
+    bad = tmp_path / "variables.toml"
+    bad.write_text(text.replace(good, f'depends = ["body1.vx"]\ndepends_kind = {kinds}', 1))
+    run = subprocess.run(
+        [sys.executable, str(GENERATE), str(bad), str(tmp_path / "c"), "--epoch", "0"],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode != 0 and needle in run.stderr + run.stdout, run.stderr

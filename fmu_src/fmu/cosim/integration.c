@@ -32,6 +32,14 @@ static int rhs(double t, const double *y, double *ydot, void *host)
     return status == FMU_MODEL_NONFINITE ? 1 : 0; /* recoverable: the integrator retries a smaller step */
 }
 
+/* The model's Jacobian at the model's time of the integrator's local time t. */
+static int jacobian(double t, const double *y, double *J, void *host)
+{
+    fmu_instance_t *inst = (fmu_instance_t *)host;
+    const int status = fmu_model.state_jacobian(inst->model, inst->integration->origin + t, y, J);
+    return status == FMU_MODEL_NONFINITE ? 1 : 0; /* recoverable: CVODE tries a smaller step */
+}
+
 static int roots(double t, const double *y, double *gout, void *host)
 {
     fmu_instance_t *inst = (fmu_instance_t *)host;
@@ -123,7 +131,7 @@ fmu_status_t integration_restart(cs_integration_t *cs, const cs_integrator_ops_t
         return FMU_ERROR;
     }
     cs->current = it;
-    cs->counted_steps = 0;
+    cs->counted_steps = cs->counted_jacobians = 0;
     cs->root_pending = 0;
     return ops->start(it->self, tau, cs->y, h_first) == 0 ? FMU_OK : FMU_ERROR;
 }
@@ -216,9 +224,11 @@ static cs_integration_t *integration_new(fmu_instance_t *inst)
             cs->abstol[k++] = inst->tolerance * fmu_model.variables[i].nominal;
         }
     }
+    const int analytic = fmu_model.cs_jacobian != NULL && fmu_model.cs_jacobian(inst->model);
     const cs_problem_t problem = {
         NX, fmu_model.n_event_indicators, inst->tolerance, cs->abstol, FIRST_STEP_HORIZON,
-        rhs, roots, integrator_message, integrator_failed, integrator_error, inst};
+        rhs, roots, integrator_message, integrator_failed, integrator_error, inst,
+        analytic ? jacobian : NULL};
     cs->problem = problem;
     return cs;
 }
@@ -261,6 +271,11 @@ long integration_count_steps(fmu_instance_t *inst)
     cs->counted_steps = c.steps;
     if (fmu_model.add_integrator_steps != NULL && added != 0) {
         fmu_model.add_integrator_steps(inst->model, added);
+    }
+    const long jacobians = c.jacobians - cs->counted_jacobians;
+    cs->counted_jacobians = c.jacobians;
+    if (fmu_model.add_jacobians != NULL && jacobians != 0) {
+        fmu_model.add_jacobians(inst->model, jacobians);
     }
     return added;
 }

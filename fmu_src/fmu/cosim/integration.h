@@ -64,6 +64,7 @@ struct cs_integration {
                          step that contains it (0: none) */
     const cs_integrator_ops_t *switch_to; /* STEP_SWITCH pending: the integrator auto chose at t_root */
     long counted_steps; /* steps since the last (re)start already added to the model's counter */
+    long counted_jacobians; /* the same for the Jacobians formed */
     cs_auto_t automatic;    /* auto's policy (auto_policy.h) */
     /* the model's analysis of the steps (analyse_live, kept_steps.h) */
     double comm_start;        /* the communication step being taken: (comm_start, FMU time] */

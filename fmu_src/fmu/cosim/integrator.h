@@ -42,11 +42,16 @@ typedef struct {
     /* what the integrator could not allocate */
     void (*error)(void *host, const char *what);
     void *host;
+    /* J[i + j n] = d f_i / d y_j at (t, y), the layout of a dense SUNDIALS matrix: 0, > 0
+     * recoverable (NULL: the integrator differentiates by itself, if it needs to) */
+    int (*jacobian)(double t, const double *y, double *J, void *host);
 } cs_problem_t;
 
-/* Steps, failed steps and steps held by stability (not accuracy) since the last (re)start. */
+/* Steps, failed steps, steps held by stability (not accuracy) and Jacobians formed since the
+ * last (re)start. */
 typedef struct {
     long steps, fails, stiff;
+    long jacobians; /* Jacobians formed (an integrator without Newton iteration: 0) */
 } cs_counts_t;
 
 /* A saved step: its interval, and the state and its derivative at both ends exactly as the

@@ -1,6 +1,7 @@
 /* The co-simulation integrator interface (integrator.h) over SUNDIALS CVODE:
  *   BDF    with Newton iteration, a dense direct linear solver and a difference-quotient
- *          Jacobian: for stiff motion (resting or rolling contact);
+ *          Jacobian, or the host's (cs_problem_t.jacobian): for stiff motion (resting or
+ *          rolling contact);
  *   Adams  Adams-Moulton with fixed-point iteration: no Jacobian and no linear algebra.
  * SUNDIALS' objects are made when CVODE first starts (a run that RK45 takes alone never touches
  * SUNDIALS). The memory is re-initialised at a restart, and made anew where it holds a stop time
@@ -52,6 +53,19 @@ static int roots(sunrealtype t, N_Vector y, sunrealtype *gout, void *user_data)
 {
     const cvode_integrator_t *it = (const cvode_integrator_t *)user_data;
     return it->problem.roots(t, N_VGetArrayPointer(y), gout, it->problem.host);
+}
+
+/* The host's Jacobian into CVODE's dense matrix (column-major, as cs_problem_t.jacobian's). */
+static int jacobian(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *user_data,
+                    N_Vector tmp1, N_Vector tmp2, N_Vector tmp3)
+{
+    (void)fy;
+    (void)tmp1;
+    (void)tmp2;
+    (void)tmp3;
+    const cvode_integrator_t *it = (const cvode_integrator_t *)user_data;
+    return it->problem.jacobian(t, N_VGetArrayPointer(y), SUNDenseMatrix_Data(J),
+                                it->problem.host);
 }
 
 static void error_handler(int error_code, const char *module, const char *function, char *msg,
@@ -212,6 +226,9 @@ static int configure(cvode_integrator_t *it, double t)
         s = check(it, CVodeSetNonlinearSolver(mem, it->NLS), "CVodeSetNonlinearSolver");
     } else if (s == 0) {
         s = check(it, CVodeSetLinearSolver(mem, it->LS, it->J), "CVodeSetLinearSolver");
+        if (s == 0 && it->problem.jacobian != NULL) {
+            s = check(it, CVodeSetJacFn(mem, jacobian), "CVodeSetJacFn");
+        }
     }
     if (s == 0) s = check(it, CVodeRootInit(mem, it->problem.n_roots, roots), "CVodeRootInit");
     if (s == 0) s = check(it, CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn");
@@ -344,9 +361,12 @@ static void cvode_integrator_counts(const void *self, cs_counts_t *counts)
 {
     void *mem = ((const cvode_integrator_t *)self)->mem;
     long nconv = 0, nerr = 0;
-    counts->steps = 0;
+    counts->steps = counts->jacobians = 0;
     if (mem != NULL) {
         CVodeGetNumSteps(mem, &counts->steps);
+        if (((const cvode_integrator_t *)self)->lmm == CV_BDF) {
+            CVodeGetNumJacEvals(mem, &counts->jacobians);
+        }
         CVodeGetNumNonlinSolvConvFails(mem, &nconv);
         CVodeGetNumErrTestFails(mem, &nerr);
     }

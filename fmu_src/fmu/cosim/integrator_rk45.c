@@ -104,6 +104,7 @@ static void rk45_integrator_counts(const void *self, cs_counts_t *counts)
     counts->steps = st.steps - it->at_start.steps;
     counts->fails = st.fails - it->at_start.fails;
     counts->stiff = st.stiff - it->at_start.stiff;
+    counts->jacobians = 0;
 }
 
 static size_t rk45_integrator_record_size(int n)

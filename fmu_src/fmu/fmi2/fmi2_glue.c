@@ -332,19 +332,12 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                         size_t nKnown, const fmi2Real dvKnown[],
                                         fmi2Real dvUnknown[])
 {
-    fmu_instance_t *inst = INST(c);
-    (void)vUnknown_ref;
-    (void)nUnknown;
-    (void)vKnown_ref;
-    (void)nKnown;
-    (void)dvKnown;
-    (void)dvUnknown;
-    if (!ALLOWED(inst, fmi2GetDirectionalDerivative)) {
+    if (!ALLOWED(INST(c), fmi2GetDirectionalDerivative)) {
         return fmi2Error;
     }
-    LOG_ERROR(inst, "fmi2GetDirectionalDerivative: not provided "
-              "(providesDirectionalDerivative = false)");
-    return fmi2Error;
+    const fmu_derivative_call_t call = {vUnknown_ref, vKnown_ref, nUnknown, nKnown, dvKnown,
+                                        dvUnknown, nKnown, nUnknown, 0};
+    return ST(fmu_partial_derivatives(INST(c), "fmi2GetDirectionalDerivative", &call));
 }
 
 /* ------------------------------------------------------------------------------------------ */

@@ -43,7 +43,7 @@
 #define STATES_fmi2SerializedFMUstateSize S_ANY
 #define STATES_fmi2SerializeFMUstate S_ANY
 #define STATES_fmi2DeSerializeFMUstate S_ANY
-#define STATES_fmi2GetDirectionalDerivative S_ANY /* not provided: refused in every state */
+#define STATES_fmi2GetDirectionalDerivative (S_GET | S_ME | S_CS)
 
 /* model exchange */
 #define STATES_fmi2EnterEventMode (FMU_EVENT | FMU_CONTINUOUS | S_ME)

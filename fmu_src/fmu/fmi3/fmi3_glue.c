@@ -15,8 +15,8 @@
  *             (eventHandlingNeeded). Without earlyReturnAllowed the step is never cut: the
  *             events inside it are handled as in FMI 2.0.
  * Not provided (refused with a message, fmi3_unsupported.c): Scheduled Execution, clocks,
- * configuration mode, directional and adjoint derivatives, output derivatives, intermediate
- * update. */
+ * configuration mode, output derivatives, intermediate update. Directional and adjoint
+ * derivatives: fmu_derivatives.c. */
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -535,4 +535,33 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
         *eventHandlingNeeded = inst->event_mode_used != 0;
     }
     return ST(status > checked ? status : checked);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* partial derivatives (docs/model.md §15) */
+
+fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],
+                                        size_t nUnknowns, const fmi3ValueReference knowns[],
+                                        size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
+                                        fmi3Float64 sensitivity[], size_t nSensitivity)
+{
+    if (!ALLOWED(INST(instance), fmi3GetDirectionalDerivative)) {
+        return fmi3Error;
+    }
+    const fmu_derivative_call_t call = {unknowns, knowns,      nUnknowns,    nKnowns, seed,
+                                        sensitivity, nSeed, nSensitivity, 0};
+    return ST(fmu_partial_derivatives(INST(instance), "fmi3GetDirectionalDerivative", &call));
+}
+
+fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],
+                                    size_t nUnknowns, const fmi3ValueReference knowns[],
+                                    size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
+                                    fmi3Float64 sensitivity[], size_t nSensitivity)
+{
+    if (!ALLOWED(INST(instance), fmi3GetAdjointDerivative)) {
+        return fmi3Error;
+    }
+    const fmu_derivative_call_t call = {unknowns, knowns,      nUnknowns,    nKnowns, seed,
+                                        sensitivity, nSeed, nSensitivity, 1};
+    return ST(fmu_partial_derivatives(INST(instance), "fmi3GetAdjointDerivative", &call));
 }

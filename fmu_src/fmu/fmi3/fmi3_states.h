@@ -64,11 +64,11 @@
 #define STATES_fmi3SerializeFMUState S_ANY
 #define STATES_fmi3DeserializeFMUState S_ANY
 #define STATES_fmi3UpdateDiscreteStates (FMU_EVENT | S_ME | S_CS)
+#define STATES_fmi3GetDirectionalDerivative (S_GET | S_ME | S_CS)
+#define STATES_fmi3GetAdjointDerivative (S_GET | S_ME | S_CS)
 /* not provided: refused in every state */
 #define STATES_fmi3GetNumberOfVariableDependencies S_ANY
 #define STATES_fmi3GetVariableDependencies S_ANY
-#define STATES_fmi3GetDirectionalDerivative S_ANY
-#define STATES_fmi3GetAdjointDerivative S_ANY
 #define STATES_fmi3EnterConfigurationMode S_ANY
 #define STATES_fmi3ExitConfigurationMode S_ANY
 #define STATES_fmi3GetIntervalDecimal S_ANY

@@ -141,40 +141,6 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
                                   "are in modelDescription.xml)");
 }
 
-fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],
-                                        size_t nUnknowns, const fmi3ValueReference knowns[],
-                                        size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
-                                        fmi3Float64 sensitivity[], size_t nSensitivity)
-{
-    (void)unknowns;
-    (void)nUnknowns;
-    (void)knowns;
-    (void)nKnowns;
-    (void)seed;
-    (void)nSeed;
-    (void)sensitivity;
-    (void)nSensitivity;
-    return NOT_PROVIDED(instance, fmi3GetDirectionalDerivative, "fmi3GetDirectionalDerivative: not provided "
-                                  "(providesDirectionalDerivatives = false)");
-}
-
-fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],
-                                    size_t nUnknowns, const fmi3ValueReference knowns[],
-                                    size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
-                                    fmi3Float64 sensitivity[], size_t nSensitivity)
-{
-    (void)unknowns;
-    (void)nUnknowns;
-    (void)knowns;
-    (void)nKnowns;
-    (void)seed;
-    (void)nSeed;
-    (void)sensitivity;
-    (void)nSensitivity;
-    return NOT_PROVIDED(instance, fmi3GetAdjointDerivative, "fmi3GetAdjointDerivative: not provided "
-                                  "(providesAdjointDerivatives = false)");
-}
-
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
 {
     return NOT_PROVIDED(instance, fmi3EnterConfigurationMode, "fmi3EnterConfigurationMode: the FMU has no structural "

@@ -33,6 +33,8 @@ typedef struct {
     /* 0, or the value the Enumeration takes (solver.method, contact.law, contact.esdu_reading) */
     int cs_method_number, law_number, esdu_reading_number;
     int integrator_steps; /* co-simulation: integrator steps (saturates at INT_MAX) */
+    int cs_analytic_jacobian; /* solver.analytic_jacobian: BDF's Newton matrix analytic */
+    int jacobian_evaluations; /* co-simulation: Jacobians formed (saturates at INT_MAX) */
 } csfh_fmu_t;
 
 /* Start values of every variable (the `paper` preset) from the generated table. */

@@ -3,9 +3,11 @@
  * messages of contact events, the co-simulation method and the peak outputs (csfh_peaks.c). */
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "csfh_constants.h"
 #include "csfh_fmu.h"
+#include "csfh_jacobian.h"
 #include "csfh_peaks.h"
 #include "csfh_variables.h"
 #include "fmu_model.h"
@@ -119,11 +121,42 @@ static int cs_method(const void *f)
     }
 }
 
+/* counter += n, saturating at INT_MAX */
+static void add_saturating(int *counter, long n)
+{
+    const long room = 0x7fffffffL - *counter;
+    *counter += (int)(n < room ? n : room);
+}
+
 static void add_integrator_steps(void *fv, long steps)
 {
-    csfh_fmu_t *f = (csfh_fmu_t *)fv;
-    const long room = 0x7fffffffL - f->integrator_steps; /* the counter saturates at INT_MAX */
-    f->integrator_steps += (int)(steps < room ? steps : room);
+    add_saturating(&((csfh_fmu_t *)fv)->integrator_steps, steps);
+}
+
+static void add_jacobians(void *fv, long jacobians)
+{
+    add_saturating(&((csfh_fmu_t *)fv)->jacobian_evaluations, jacobians);
+}
+
+static int cs_jacobian(const void *f)
+{
+    return ((const csfh_fmu_t *)f)->cs_analytic_jacobian;
+}
+
+/* d xdot / d x of csfh_model_derivatives (docs/model.md §15.1), column-major */
+static int state_jacobian(void *f, double t, const double *x, double *J)
+{
+    (void)t; /* the pulse of §14.8 depends on time only */
+    double dx[6][6], du[6][CSFH_N_JAC_INPUTS];
+    if (csfh_model_rhs_jacobian(MODEL(f), x, dx, du) != CSFH_OK) {
+        return FMU_MODEL_NONFINITE;
+    }
+    for (int i = 0; i < 6; i++) {
+        for (int j = 0; j < 6; j++) {
+            J[i + 6 * j] = dx[i][j];
+        }
+    }
+    return FMU_MODEL_OK;
 }
 
 /* Restored FMU state: the fields that are not stored table variables (checked by the glue:
@@ -142,7 +175,8 @@ static int check_state(const void *fv, char *msg, size_t msg_size)
                   {"diagnostics.flexure_evaluations", m->counters.flexure},
                   {"diagnostics.contact_evaluations", m->counters.contact},
                   {"diagnostics.friction_evaluations", m->counters.friction},
-                  {"diagnostics.integrator_steps", f->integrator_steps}};
+                  {"diagnostics.integrator_steps", f->integrator_steps},
+                  {"diagnostics.jacobian_evaluations", f->jacobian_evaluations}};
     for (size_t i = 0; i < sizeof(counts) / sizeof(counts[0]); i++) {
         if (counts[i].value < 0) {
             snprintf(msg, msg_size, "%s = %d is negative", counts[i].name, counts[i].value);
@@ -164,6 +198,81 @@ static int check_state(const void *fv, char *msg, size_t msg_size)
         }
     }
     return 0;
+}
+
+/* The partial derivatives (docs/model.md §15): the derivatives, the states (outputs too), the
+ * frame's acceleration, then the outputs of csfh_model_output_jacobian (the peaks as the
+ * instantaneous values they equal in model exchange; in co-simulation only the inputs are
+ * knowns); with respect to the states and the inputs of CSFH_N_JAC_INPUTS. */
+#define N_FIXED 14
+static const struct {
+    unsigned int vr;
+    int row; /* CSFH_JOUT_* */
+} output_rows[] = {
+    {CSFH_VR_CONTACT_F_N, CSFH_JOUT_F_N},
+    {CSFH_VR_CONTACT_F_T, CSFH_JOUT_F_T},
+    {CSFH_VR_CONTACT_INDENTATION, CSFH_JOUT_INDENTATION},
+    {CSFH_VR_CONTACT_GAP, CSFH_JOUT_GAP},
+    {CSFH_VR_CONTACT_V_T, CSFH_JOUT_V_T},
+    {CSFH_VR_CONTACT_INDENTATION_RATE, CSFH_JOUT_INDENTATION_RATE},
+    {CSFH_VR_CONTACT_F_N_PEAK, CSFH_JOUT_F_N},
+    {CSFH_VR_CONTACT_F_T_PEAK, CSFH_JOUT_F_T_ABS},
+    {CSFH_VR_CONTACT_INDENTATION_PEAK, CSFH_JOUT_INDENTATION},
+    {CSFH_VR_ENERGY_TOTAL, CSFH_JOUT_E_TOTAL},
+    {CSFH_VR_ENERGY_KINETIC, CSFH_JOUT_E_KINETIC},
+    {CSFH_VR_ENERGY_GRAVITY, CSFH_JOUT_E_GRAVITY},
+    {CSFH_VR_ENERGY_FLEXURE, CSFH_JOUT_E_FLEXURE},
+    {CSFH_VR_ENERGY_CONTACT, CSFH_JOUT_E_CONTACT},
+    {CSFH_VR_FLEXURE_STRESS_MAX, CSFH_JOUT_STRESS_MAX},
+    {CSFH_VR_FLEXURE_STRESS_LOCATION, CSFH_JOUT_STRESS_LOCATION},
+    {CSFH_VR_FLEXURE_STRESS_MAX_PEAK, CSFH_JOUT_STRESS_MAX},
+    {CSFH_VR_FLEXURE_STRESS_MARGIN, CSFH_JOUT_STRESS_MARGIN},
+    {CSFH_VR_CONTACT_PRESSURE_MAX, CSFH_JOUT_PRESSURE_MAX},
+    {CSFH_VR_CONTACT_HALF_WIDTH, CSFH_JOUT_HALF_WIDTH},
+    {CSFH_VR_CONTACT_PRESSURE_MAX_PEAK, CSFH_JOUT_PRESSURE_MAX},
+    {CSFH_VR_CONTACT_PRESSURE_MARGIN, CSFH_JOUT_PRESSURE_MARGIN},
+};
+#define N_OUTPUT_ROWS (sizeof(output_rows) / sizeof(output_rows[0]))
+#define N_JAC_UNKNOWNS (N_FIXED + (int)N_OUTPUT_ROWS)
+#define N_JAC_KNOWNS (6 + CSFH_N_JAC_INPUTS)
+
+static const unsigned int jac_unknowns[N_JAC_UNKNOWNS] = {
+    CSFH_VR_DER_BODY1_X, CSFH_VR_DER_BODY1_Y, CSFH_VR_DER_BODY1_THETA, CSFH_VR_DER_BODY1_VX,
+    CSFH_VR_DER_BODY1_VY, CSFH_VR_DER_BODY1_OMEGA, CSFH_VR_BODY1_X, CSFH_VR_BODY1_Y,
+    CSFH_VR_BODY1_THETA, CSFH_VR_BODY1_VX, CSFH_VR_BODY1_VY, CSFH_VR_BODY1_OMEGA,
+    CSFH_VR_A_FRAME_1, CSFH_VR_A_FRAME_2, CSFH_VR_CONTACT_F_N, CSFH_VR_CONTACT_F_T,
+    CSFH_VR_CONTACT_INDENTATION, CSFH_VR_CONTACT_GAP, CSFH_VR_CONTACT_V_T,
+    CSFH_VR_CONTACT_INDENTATION_RATE, CSFH_VR_CONTACT_F_N_PEAK, CSFH_VR_CONTACT_F_T_PEAK,
+    CSFH_VR_CONTACT_INDENTATION_PEAK, CSFH_VR_ENERGY_TOTAL, CSFH_VR_ENERGY_KINETIC,
+    CSFH_VR_ENERGY_GRAVITY, CSFH_VR_ENERGY_FLEXURE, CSFH_VR_ENERGY_CONTACT,
+    CSFH_VR_FLEXURE_STRESS_MAX, CSFH_VR_FLEXURE_STRESS_LOCATION, CSFH_VR_FLEXURE_STRESS_MAX_PEAK,
+    CSFH_VR_FLEXURE_STRESS_MARGIN, CSFH_VR_CONTACT_PRESSURE_MAX, CSFH_VR_CONTACT_HALF_WIDTH,
+    CSFH_VR_CONTACT_PRESSURE_MAX_PEAK, CSFH_VR_CONTACT_PRESSURE_MARGIN};
+static const unsigned int jac_knowns[N_JAC_KNOWNS] = {
+    CSFH_VR_BODY1_X,  CSFH_VR_BODY1_Y,  CSFH_VR_BODY1_THETA, CSFH_VR_BODY1_VX,
+    CSFH_VR_BODY1_VY, CSFH_VR_BODY1_OMEGA, CSFH_VR_F_EXT_1,   CSFH_VR_F_EXT_2,
+    CSFH_VR_M_EXT,    CSFH_VR_A_BASE_1, CSFH_VR_A_BASE_2};
+
+static int jacobian(void *f, double *J)
+{
+    const csfh_model_t *m = MODEL(f);
+    double A[6][6], B[6][CSFH_N_JAC_INPUTS], D[CSFH_N_JOUT][6];
+    if (csfh_model_rhs_jacobian(m, m->x, A, B) != CSFH_OK ||
+        csfh_model_output_jacobian(m, m->x, D) != CSFH_OK) {
+        return FMU_MODEL_NONFINITE;
+    }
+    memset(J, 0, (size_t)N_JAC_UNKNOWNS * N_JAC_KNOWNS * sizeof(double));
+    for (int i = 0; i < 6; i++) {
+        memcpy(J + i * N_JAC_KNOWNS, A[i], sizeof(A[i]));
+        memcpy(J + i * N_JAC_KNOWNS + 6, B[i], sizeof(B[i]));
+        J[(6 + i) * N_JAC_KNOWNS + i] = 1.0; /* the states as outputs */
+    }
+    /* a_frame = a_base + pulse (docs/model.md §14.1) */
+    J[12 * N_JAC_KNOWNS + 6 + 3] = J[13 * N_JAC_KNOWNS + 6 + 4] = 1.0;
+    for (size_t k = 0; k < N_OUTPUT_ROWS; k++) {
+        memcpy(J + (N_FIXED + (int)k) * N_JAC_KNOWNS, D[output_rows[k].row], sizeof(D[0]));
+    }
+    return FMU_MODEL_OK;
 }
 
 const fmu_model_t fmu_model = {
@@ -188,9 +297,17 @@ const fmu_model_t fmu_model = {
     .event_update = event_update,
     .outputs = outputs,
     .add_integrator_steps = add_integrator_steps,
+    .add_jacobians = add_jacobians,
+    .cs_jacobian = cs_jacobian,
+    .state_jacobian = state_jacobian,
     .cs_method = cs_method,
     .step_memory = sizeof(csfh_step_peaks_t),
     .comm_step_begins = csfh_peaks_begin,
     .analyse_step = csfh_peaks_analyse_step,
     .check_state = check_state,
+    .n_jac_unknowns = N_JAC_UNKNOWNS,
+    .n_jac_knowns = N_JAC_KNOWNS,
+    .jac_unknowns = jac_unknowns,
+    .jac_knowns = jac_knowns,
+    .jacobian = jacobian,
 };

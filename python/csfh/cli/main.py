@@ -18,12 +18,13 @@ from typing import Any
 def build_parser() -> Any:
     """The argument parser (argparse.ArgumentParser) of every command."""
     from .._version import __version__
-    from . import accuracy, common, cosim, design, run, shock, sweep
+    from . import accuracy, common, cosim, design, linearize, run, shock, sweep
 
     parser = common.Parser(prog="csfh", description=__doc__, formatter_class=common.HelpFormatter)
     parser.add_argument("--version", action="version", version=f"csfh {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for module in (run, accuracy, sweep, shock, design, cosim):  # each defines its commands
+    # each module defines its commands
+    for module in (run, accuracy, sweep, shock, design, cosim, linearize):
         module.register(sub)
     return parser
 

@@ -121,6 +121,7 @@ INTERFACE = Interface(
         Variable("flexure.sbar[1]", 95, "Real", "calculatedParameter", "fixed", initial="calculated", quantity="Length", unit="m", description="Attachment point C1 relative to G1, body frame x (= O_F + rho e(phi_root + beta); Table 1: 0.2920)"),
         Variable("flexure.sbar[2]", 96, "Real", "calculatedParameter", "fixed", initial="calculated", quantity="Length", unit="m", description="Attachment point C1 relative to G1, body frame y (Table 1: -0.02471)"),
         Variable("solver.method", 97, "Enumeration", "parameter", "fixed", start=1, declaredType="SolverMethod", description="Co-simulation integrator: auto (RK45, BDF when stiff), BDF, Adams or RK45; the relative tolerance is fmi2SetupExperiment's, in [2.2e-15, 1) (1e-6 when not given)"),
+        Variable("solver.analytic_jacobian", 156, "Boolean", "parameter", "fixed", start=False, description="Co-simulation BDF: the analytic Jacobian of docs/model.md §15 as CVODE's Newton matrix (false: CVODE's difference quotients, the default: its trajectories are those of earlier runs bit for bit)"),
         Variable("solver.method_number", 98, "Integer", "parameter", "fixed", start=0, range=Range(0.0, 4.0), description="solver.method as a number, for importers that ignore Enumeration variables (libcosim): 0 keeps solver.method, 1 auto, 2 BDF, 3 Adams, 4 RK45"),
         Variable("contact.F_N", 101, "Real", "output", "continuous", quantity="Force", unit="N", nominal=10000.0, description="Instantaneous normal contact force on body 1 (>= 0, along n_c), at the current time: in co-simulation 0 at most communication points, since a contact lasts far less than a typical step (microseconds to a millisecond); contact.F_N_peak is the largest over the step"),
         Variable("contact.F_T", 102, "Real", "output", "continuous", quantity="Force", unit="N", nominal=1000.0, description="Instantaneous tangential friction force on body 1 along t_c, at the current time: in co-simulation 0 at most communication points (see contact.F_N); contact.F_T_peak is the largest |F_T| over the step"),
@@ -157,6 +158,7 @@ INTERFACE = Interface(
         Variable("diagnostics.contact_evaluations", 133, "Integer", "local", "discrete", initial="calculated", description="Number of contact kinematics evaluations since instantiation"),
         Variable("diagnostics.friction_evaluations", 134, "Integer", "local", "discrete", initial="calculated", description="Number of friction law evaluations since instantiation"),
         Variable("diagnostics.integrator_steps", 135, "Integer", "local", "discrete", initial="calculated", description="Number of steps of the co-simulation integrator (CVODE) since instantiation"),
+        Variable("diagnostics.jacobian_evaluations", 138, "Integer", "local", "discrete", initial="calculated", description="Number of Jacobians the co-simulation integrator (CVODE BDF) formed since instantiation, analytic or by difference quotients"),
     ),
     enumerations=(
         Enumeration("ContactLaw", "Normal contact force law (docs/model.md §4)", (

@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -275,6 +277,22 @@ def _bisect(slope: Any, lo: float, hi: float) -> float:
     return 0.5 * (lo + hi)
 
 
+def _initialize(
+    fmu: Any,
+    scene: Scene,
+    law: str,
+    rtol: float,
+    t_end: float,
+    parameters: dict[str, Any] | None,
+) -> None:
+    """Set-up and initialization mode with every start value of the run (fmu.start_values)."""
+    fmu.setupExperiment(tolerance=rtol, startTime=0.0, stopTime=t_end)
+    fmu.enterInitializationMode()
+    for name, kind, value in start_values(scene, law, parameters):
+        getattr(fmu, f"set{kind}")([vr(name)], [value])
+    fmu.exitInitializationMode()
+
+
 def simulate_me(
     scene: Scene,
     law: str,
@@ -305,11 +323,7 @@ def simulate_me(
     fmu, log = _instantiate()
     run: _MeRun | None = None
     try:
-        fmu.setupExperiment(tolerance=rtol, startTime=0.0, stopTime=t_end)
-        fmu.enterInitializationMode()
-        for name, kind, value in start_values(scene, law, parameters):
-            getattr(fmu, f"set{kind}")([vr(name)], [value])
-        fmu.exitInitializationMode()
+        _initialize(fmu, scene, law, rtol, t_end, parameters)
         run = _MeRun(fmu, law, rtol, t_end, grid, max_step_records, max_steps)
         run.integrate(progress)
         stats = run.statistics()
@@ -328,3 +342,42 @@ def simulate_me(
         "wall_time": time.perf_counter() - wall,
     }
     return tr
+
+
+@contextmanager
+def instance_at(
+    scene: Scene,
+    law: str,
+    time: float = 0.0,
+    *,
+    parameters: dict[str, Any] | None = None,
+    rtol: float | None = None,
+) -> Iterator[Any]:
+    """A model-exchange instance (fmpy's FMU2Model) in continuous-time mode at `time`: after
+    the event iteration at the scene's start, and for `time` > 0 after a run to `time` as
+    `simulate_me` computes it, so that its states, its contact mode and the onset rate the
+    contact damping uses (docs/model.md §10.4) are those of that run. A failed FMI call inside
+    the block is a SimulationError naming the call."""
+    from fmpy.fmi1 import FMICallException
+
+    if law != "none":  # the flexure alone is a model too
+        check_law(law)
+    rtol = scene.integrator.rtol if rtol is None else rtol
+    fmu, log = _instantiate()
+    run: _MeRun | None = None
+    try:
+        _initialize(fmu, scene, law, rtol, max(time, scene.stop_time), parameters)
+        if time > 0.0:
+            run = _MeRun(fmu, law, rtol, time, np.empty(0), 0, MAX_ME_STEPS)
+            run.integrate(None)
+        else:
+            _event_iteration(fmu)
+            fmu.enterContinuousTimeMode()
+        yield fmu
+    except FMICallException as exc:
+        t = run.t if run is not None else 0.0
+        raise fmu_error(law, t, exc.function or type(exc).__name__, log.reason(str(exc))) from None
+    finally:
+        if run is not None:
+            run.solver.close()
+        fmu.freeInstance()
