@@ -52,6 +52,39 @@ class MasterRun:
     counts: list[int]  # the COUNT integers at the end
 
 
+def master_command(
+    master: Path,
+    scene: Scene,
+    law: str,
+    *,
+    rtol: float,
+    communication_step: float,
+    repeats: int,
+    read: tuple[str, ...] = STATE_NAMES,
+    count: tuple[str, ...] = ("contact.count",),
+    extra: dict[str, Any] | None = None,
+    binary: Path | None = None,
+) -> list[str]:
+    """The compiled master's command line for `scene` with `law` (run_c_master's arguments)."""
+    variables = model_info.variables()
+    starts = []
+    for name, value in start_values(scene, law, extra).items():
+        kind = {"Real": "r", "Boolean": "b"}.get(variables[name].type, "i")
+        starts.append(f"{variables[name].valueReference}:{kind}={float(value)!r}")
+    return [
+        str(master),
+        str(binary) if binary is not None else _binary(),
+        model_info.model_description().guid,
+        repr(rtol),
+        repr(communication_step),
+        repr(scene.stop_time),
+        str(repeats),
+        ",".join(str(variables[n].valueReference) for n in read),
+        ",".join(str(variables[n].valueReference) for n in count),
+        *starts,
+    ]
+
+
 def run_c_master(
     master: Path,
     scene: Scene,
@@ -67,28 +100,19 @@ def run_c_master(
 ) -> MasterRun:
     """Run `scene` with `law` in the compiled master; the loop's median wall time and results.
     `binary`: the FMU binary to load (default: binaries/linux64/csfh.so of the FMU in use)."""
-    variables = model_info.variables()
-    starts = []
-    for name, value in start_values(scene, law, extra).items():
-        kind = {"Real": "r", "Boolean": "b"}.get(variables[name].type, "i")
-        starts.append(f"{variables[name].valueReference}:{kind}={float(value)!r}")
-    out = subprocess.run(
-        [
-            str(master),
-            str(binary) if binary is not None else _binary(),
-            model_info.model_description().guid,
-            repr(rtol),
-            repr(communication_step),
-            repr(scene.stop_time),
-            str(repeats),
-            ",".join(str(variables[n].valueReference) for n in read),
-            ",".join(str(variables[n].valueReference) for n in count),
-            *starts,
-        ],
-        check=True,
-        capture_output=True,
-        text=True,
+    command = master_command(
+        master,
+        scene,
+        law,
+        rtol=rtol,
+        communication_step=communication_step,
+        repeats=repeats,
+        read=read,
+        count=count,
+        extra=extra,
+        binary=binary,
     )
+    out = subprocess.run(command, check=True, capture_output=True, text=True)
     result = json.loads(out.stdout)
     return MasterRun(
         loop_seconds=float(result["loop_seconds"]),

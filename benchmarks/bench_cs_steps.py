@@ -1,0 +1,142 @@
+"""The co-simulation integrator's work per step: this FMU binary against another build of it (the
+baseline, e.g. the main branch's), in the compiled master, on the first three contacts of the
+`central` scene for the three event-driven laws (method auto: RK45 through flight and impacts).
+
+Each round runs the compiled master (master/bench_cs_master.c, built as build/bench_cs_master)
+once with each binary, in turns (the same machine state for both); a run is `--repeats` runs of
+the scene on one re-used instance, timed as the median of its repeats. The table gives the
+medians over the rounds and the ratio baseline / this binary (> 1: this binary is faster), and
+whether both binaries end in bitwise the same state (the six states, printed to 17 digits).
+
+With --perf (needs `perf`): the top entries of a `perf record` profile of each binary for each
+law (self time, the share of all samples of that master process).
+
+Build the baseline from another checkout, e.g.
+    git worktree add /tmp/csfh-main main && cmake -S /tmp/csfh-main -B /tmp/csfh-main/build \\
+        -G Ninja -DCSFH_PLATFORMS=host && cmake --build /tmp/csfh-main/build
+    (binary: /tmp/csfh-main/build/binaries/csfh/linux64/csfh.so)
+
+Run: python benchmarks/bench_cs_steps.py --baseline PATH [--binary PATH] [--rounds 9]
+     [--repeats 2001] [--rtol 1e-6 1e-9] [--perf] [--master build/bench_cs_master]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import shutil
+import statistics
+import subprocess
+import tempfile
+from dataclasses import replace
+from pathlib import Path
+
+from c_master import _binary, default_master, master_command, run_c_master
+
+from csfh import load_scene
+from csfh.model.scene import Scene
+
+LAWS = ("LN_spheres", "LN_cylinders", "LN_ESDU")
+
+
+def timed_rounds(
+    master: Path,
+    binaries: dict[str, Path],
+    scene: Scene,
+    law: str,
+    rtol: float,
+    rounds: int,
+    repeats: int,
+) -> tuple[dict[str, list[float]], bool]:
+    """Loop times of each binary, in turns; whether their final states are bitwise equal."""
+    walls: dict[str, list[float]] = {name: [] for name in binaries}
+    finals: dict[str, list[float]] = {}
+    for _ in range(rounds):
+        for name, binary in binaries.items():
+            run = run_c_master(
+                master,
+                scene,
+                law,
+                rtol=rtol,
+                communication_step=1e-2,
+                repeats=repeats,
+                binary=binary,
+            )
+            walls[name].append(run.loop_seconds)
+            finals[name] = run.final
+    first, second = finals.values()
+    return walls, [x.hex() for x in first] == [x.hex() for x in second]
+
+
+def perf_top(master: Path, binary: Path, scene: Scene, law: str, rtol: float, n: int) -> list[str]:
+    """The top n self-time entries of a perf profile of the master on `binary`."""
+    command = master_command(
+        master, scene, law, rtol=rtol, communication_step=1e-2, repeats=20001, binary=binary
+    )
+    with tempfile.TemporaryDirectory() as tmp:
+        data = Path(tmp) / "perf.data"
+        subprocess.run(
+            ["perf", "record", "-q", "-o", str(data), "--", *command],
+            check=True,
+            capture_output=True,
+        )
+        report = subprocess.run(
+            ["perf", "report", "-i", str(data), "--no-children", "--sort", "symbol", "--stdio"],
+            check=True,
+            capture_output=True,
+            text=True,
+        ).stdout
+    rows = [line.split() for line in report.splitlines() if line.strip()[:1].isdigit()]
+    return [f"{row[0]:>7} {row[-1]}" for row in rows[:n]]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--baseline", type=Path, required=True, help="the other build's csfh.so")
+    ap.add_argument("--binary", type=Path, default=None, help="default: the FMU in use")
+    ap.add_argument("--rounds", type=int, default=9)
+    ap.add_argument("--repeats", type=int, default=2001, help="runs of the scene per master run")
+    ap.add_argument("--rtol", type=float, nargs="+", default=[1e-6, 1e-9])
+    ap.add_argument("--horizon", type=float, default=0.42, help="s (first three contacts)")
+    ap.add_argument("--perf", action="store_true", help="also the perf profiles' top entries")
+    ap.add_argument("--master", type=Path, default=default_master())
+    args = ap.parse_args()
+    binaries = {
+        "baseline": args.baseline,
+        "this": args.binary if args.binary is not None else Path(_binary()),
+    }
+    scene = replace(load_scene("central"), stop_time=args.horizon)
+    print(
+        f"scene {scene.name}, horizon {args.horizon} s, 10 ms grid, method auto; medians of "
+        f"{args.rounds} rounds in turns, each the median of {args.repeats} runs\n"
+    )
+    header = (
+        f"{'model':<13} {'rtol':>6} | {'baseline [us]':>13} {'this [us]':>10} | "
+        f"{'ratio':>6} | {'bitwise':>7}"
+    )
+    print(header)
+    print("-" * len(header))
+    for law in LAWS:
+        for rtol in args.rtol:
+            walls, same = timed_rounds(
+                args.master, binaries, scene, law, rtol, args.rounds, args.repeats
+            )
+            base, this = (statistics.median(walls[k]) for k in ("baseline", "this"))
+            ratio = base / this if this > 0 else math.nan
+            print(
+                f"{law:<13} {rtol:6.0e} | {1e6 * base:13.2f} {1e6 * this:10.2f} | "
+                f"{ratio:6.3f} | {'yes' if same else 'NO':>7}"
+            )
+    if args.perf:
+        if shutil.which("perf") is None:
+            print("\nno perf: no profiles")
+            return
+        for law in LAWS:
+            for name, binary in binaries.items():
+                print(f"\nperf, {law}, rtol {args.rtol[0]:g}, {name}: self time, top entries")
+                for line in perf_top(args.master, binary, scene, law, args.rtol[0], 12):
+                    print("  " + line)
+
+
+if __name__ == "__main__":
+    main()
