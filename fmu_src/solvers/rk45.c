@@ -69,8 +69,8 @@ rk45_t *rk45_create(int n, int n_roots, rk45_rhs_fn f, rk45_root_fn g, void *use
         return NULL;
     }
     rk45_t *r = (rk45_t *)calloc(1, sizeof(*r));
-    /* y, y_old, y_new, ys, k[7], dense[5], w, atol: 18 vectors; g: 4 vectors of n_roots */
-    double *block = (double *)calloc((size_t)(18 * n + 4 * n_roots + 1), sizeof(double));
+    /* y, y_old, y_new, ys, k[7], dense[5], w, y_mid, atol: 19 vectors; g: 4 vectors of n_roots */
+    double *block = (double *)calloc((size_t)(19 * n + 4 * n_roots + 1), sizeof(double));
     if (r == NULL || block == NULL) {
         free(r);
         free(block);
@@ -94,6 +94,7 @@ rk45_t *rk45_create(int n, int n_roots, rk45_rhs_fn f, rk45_root_fn g, void *use
         r->dense[i] = p, p += n;
     }
     r->w = p, p += n;
+    r->y_mid = p, p += n;
     r->atol = p, p += n;
     r->g_n = p, p += n_roots;
     r->g_lo = p, p += n_roots;
@@ -138,7 +139,7 @@ int rk45_init(rk45_t *r, double t0, const double *y0, double h_max_first, double
     memcpy(r->y, y0, (size_t)r->n * sizeof(double));
     r->t_n = r->t_old = t0;
     r->h_last = 0.0;
-    r->h = fmin(h_first, h_max_first); /* 0: estimated at the first step */
+    r->h = rk45_min(h_first, h_max_first); /* 0: estimated at the first step */
     r->h_max_first = h_max_first;
     r->log_fac_old = log(1e-4);
     r->fsal_swap = 0;
@@ -167,7 +168,7 @@ static double wrms(const rk45_t *r, const double *v, const double *a, const doub
 {
     double sum = 0.0;
     for (int i = 0; i < r->n; i++) {
-        const double sc = r->atol[i] + r->rtol * fmax(fabs(a[i]), fabs(b[i]));
+        const double sc = r->atol[i] + r->rtol * rk45_max(fabs(a[i]), fabs(b[i]));
         const double q = v[i] / sc;
         sum += q * q;
     }
@@ -189,7 +190,7 @@ static int initial_step(rk45_t *r)
     dy = sqrt(dy / n);
     df = sqrt(df / n);
     double h = (dy <= 1e-5 || df <= 1e-5) ? 1e-6 : 0.01 * dy / df;
-    h = fmin(h, r->h_max_first);
+    h = rk45_min(h, r->h_max_first);
     for (int i = 0; i < n; i++) {
         r->ys[i] = y[i] + h * f0[i];
     }
@@ -210,9 +211,9 @@ static int initial_step(rk45_t *r)
     } else {
         d2 = 1e6 * df / h; /* recoverable failure: take a small step */
     }
-    const double dmax = fmax(d2, df);
-    const double h1 = dmax <= 1e-15 ? fmax(1e-6, 1e-3 * h) : pow(0.01 / dmax, 0.2);
-    r->h = fmin(fmin(100.0 * h, h1), r->h_max_first);
+    const double dmax = rk45_max(d2, df);
+    const double h1 = dmax <= 1e-15 ? rk45_max(1e-6, 1e-3 * h) : pow(0.01 / dmax, 0.2);
+    r->h = rk45_min(rk45_min(100.0 * h, h1), r->h_max_first);
     return RK45_SUCCESS;
 }
 
@@ -332,7 +333,7 @@ static int error_failed(rk45_t *r, attempts_t *a, double t0, double err, double 
         a->err_failed = err;
         a->h_failed = *h;
         const double fac = SAFETY * pow(err, -1.0 / order);
-        *h *= fmin(SAFETY, fmax(a->err_fails > 0 ? FAC_MIN_REPEATED : FAC_MIN, fac));
+        *h *= rk45_min(SAFETY, rk45_max(a->err_fails > 0 ? FAC_MIN_REPEATED : FAC_MIN, fac));
     }
     r->rejected = 1;
     if (++a->err_fails >= MAX_ERR_FAILS) {
@@ -395,11 +396,11 @@ static void accept(rk45_t *r, double t0, double h, double err)
         r->stats.stiff++;
     }
     /* SAFETY err^-alpha err_old^beta, as one exponential */
-    const double log_err = log(fmax(err, 1e-10));
+    const double log_err = log(rk45_max(err, 1e-10));
     double fac = SAFETY * exp(-PI_ALPHA * log_err + PI_BETA * r->log_fac_old);
-    fac = fmin(FAC_MAX, fmax(FAC_MIN, fac));
+    fac = rk45_min(FAC_MAX, rk45_max(FAC_MIN, fac));
     if (r->rejected) {
-        fac = fmin(fac, 1.0);
+        fac = rk45_min(fac, 1.0);
     }
     r->log_fac_old = log_err > log(1e-4) ? log_err : log(1e-4);
     r->rejected = 0;
@@ -422,6 +423,14 @@ static void accept(rk45_t *r, double t0, double h, double err)
     r->stats.steps++;
 }
 
+/* A failure s of the step from (t0, y0): that point, the last successful one, in (t, y). */
+static int failed_at(const rk45_t *r, int s, double t0, const double *y0, double *t, double *y)
+{
+    *t = t0;
+    memcpy(y, y0, (size_t)r->n * sizeof(double));
+    return s;
+}
+
 int rk45_step(rk45_t *r, double *t, double *y)
 {
     if (r->resume_roots) { /* the rest of the step after a returned root */
@@ -430,12 +439,10 @@ int rk45_step(rk45_t *r, double *t, double *y)
     if (!r->initialized) {
         return RK45_ILL_INPUT;
     }
-    *t = r->t_n;
-    memcpy(y, r->y, (size_t)r->n * sizeof(double));
     if (r->h <= 0.0) {
         const int s = initial_step(r);
         if (s != RK45_SUCCESS) {
-            return s;
+            return failed_at(r, s, r->t_n, r->y, t, y);
         }
     }
     if (r->fsal_swap) { /* first same as last */
@@ -448,18 +455,21 @@ int rk45_step(rk45_t *r, double *t, double *y)
     double h = r->h, err = 0.0;
     const int s = attempt(r, t0, &h, &err);
     if (s != RK45_SUCCESS) {
-        return s;
+        return failed_at(r, s, t0, r->y, t, y);
     }
     accept(r, t0, h, err);
-    /* roots in (t_old, t_n] */
+    /* roots in (t_old, t_n]: g at the step's start is g at the last step's end */
     if (r->n_roots > 0) {
-        memcpy(r->g_lo, r->g_n, (size_t)r->n_roots * sizeof(double));
+        double *g = r->g_lo;
+        r->g_lo = r->g_n;
+        r->g_n = g;
         const int rs = rk45_eval_roots(r, r->t_n, r->y, r->g_n);
         if (rs != RK45_SUCCESS) {
-            return rs;
+            return failed_at(r, rs, t0, r->y_old, t, y);
         }
     }
-    return rk45_check_roots(r, r->t_old, t, y);
+    const int rc = rk45_check_roots(r, r->t_old, t, y);
+    return rc < 0 ? failed_at(r, rc, t0, r->y_old, t, y) : rc;
 }
 
 double rk45_current_time(const rk45_t *r)

@@ -21,6 +21,7 @@ struct rk45 {
     double *y, *y_old, *y_new, *ys, *k[7];
     double *dense[5]; /* Shampine's coefficients of the last step (dense_valid) */
     double *w;        /* work vector */
+    double *y_mid;    /* root finding: the state at the bracket's end last evaluated there */
     double h;         /* the next step's size (0: estimate it) */
     double h_max_first;
     double log_fac_old; /* PI control: log of the previous accepted error */
@@ -39,6 +40,19 @@ struct rk45 {
     char message[256];
     double *block; /* every vector above */
 };
+
+/* fmax and fmin, the same values (also for a NaN argument: the other one), inline: without
+ * -ffinite-math-only the compiler calls libm's for every use, one call per state in the error
+ * norm of each step attempt. */
+static inline double rk45_max(double a, double b)
+{
+    return (a > b || b != b) ? a : b;
+}
+
+static inline double rk45_min(double a, double b)
+{
+    return (a < b || b != b) ? a : b;
+}
 
 /* The message of the last failure (rk45_message; rk45_message.c). */
 #if defined(__GNUC__)

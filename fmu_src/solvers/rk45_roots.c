@@ -56,35 +56,38 @@ static double next_point(const rk45_t *r, double t_lo, double t_hi, double alpha
     if (!(t_mid - t_lo >= 0.5 * ttol)) {
         const double half = 0.5 * (t_hi - t_lo) / r->h_last;
         const double frac = half > 0.1 ? 0.1 : half;
-        t_mid = t_lo + fmax(frac, 0.0) * (t_hi - t_lo);
+        t_mid = t_lo + rk45_max(frac, 0.0) * (t_hi - t_lo);
         t_mid = t_mid - t_lo >= 0.5 * ttol ? t_mid : t_lo + 0.5 * ttol;
     }
     if (!(t_hi - t_mid >= 0.5 * ttol)) {
         const double half = 0.5 * (t_hi - t_lo) / r->h_last;
         const double frac = half > 0.1 ? 0.1 : half;
-        t_mid = t_hi - fmax(frac, 0.0) * (t_hi - t_lo);
+        t_mid = t_hi - rk45_max(frac, 0.0) * (t_hi - t_lo);
         t_mid = t_hi - t_mid >= 0.5 * ttol ? t_mid : t_hi - 0.5 * ttol;
     }
     return t_mid;
 }
 
-/* The first root of g in (t_lo, t_n] given g_lo (at t_lo) and g_hi (at t_n): 0 if none, 1 with
+/* The first root of g in (t_lo, t_n] given g_lo (at t_lo) and g_n (at t_n): 0 if none, 1 with
  * the time in *t_root (the end of the final bracket, past the sign change) and g there in
- * g_hi, or a failure. Illinois regula falsi on the component whose secant root lies nearest
- * t_lo; each iteration's bracket keeps a sign change of some component. */
-static int find_root(rk45_t *r, double t_lo, double *t_root)
+ * g_hi, or a failure; *y_known: the state at *t_root is in y_mid (the last evaluation there).
+ * Illinois regula falsi on the component whose secant root lies nearest t_lo; each iteration's
+ * bracket keeps a sign change of some component. The vectors of g and the state at the
+ * bracket's end trade places with the new point's instead of being copied. */
+static int find_root(rk45_t *r, double t_lo, double *t_root, int *y_known)
 {
     const int m = r->n_roots;
-    double *g_lo = r->g_lo, *g_hi = r->g_hi, *g_mid = r->g_mid;
     int unused = 0;
-    int imax = strongest(g_lo, g_hi, m, &unused);
+    int imax = strongest(r->g_lo, r->g_n, m, &unused);
     if (imax < 0) {
         return 0;
     }
+    memcpy(r->g_hi, r->g_n, (size_t)m * sizeof(double));
     double t_hi = r->t_n;
     const double ttol = 100.0 * DBL_EPSILON * (fabs(r->t_n) + fabs(r->h_last));
     double alpha = 1.0;
     int side = 0, side_prev = -1;
+    *y_known = 0;
     while (t_hi - t_lo > ttol) {
         /* Illinois: halve the weight of the end kept twice in a row */
         if (side == side_prev) {
@@ -94,17 +97,23 @@ static int find_root(rk45_t *r, double t_lo, double *t_root)
         }
         const double t_mid = next_point(r, t_lo, t_hi, alpha, imax, ttol);
         rk45_dense(r, t_mid, 0, r->w);
-        const int rs = rk45_eval_roots(r, t_mid, r->w, g_mid);
+        const int rs = rk45_eval_roots(r, t_mid, r->w, r->g_mid);
         if (rs != RK45_SUCCESS) {
             return rs;
         }
         side_prev = side;
+        double *g_mid = r->g_mid;
         /* a sign change in [t_lo, t_mid]? */
         int zero = 0;
-        imax = strongest(g_lo, g_mid, m, &zero);
+        imax = strongest(r->g_lo, g_mid, m, &zero);
         if (imax >= 0) {
             t_hi = t_mid;
-            memcpy(g_hi, g_mid, (size_t)m * sizeof(double));
+            r->g_mid = r->g_hi;
+            r->g_hi = g_mid;
+            double *w = r->w;
+            r->w = r->y_mid;
+            r->y_mid = w;
+            *y_known = 1;
             if (zero) {
                 break; /* g is exactly zero at t_mid */
             }
@@ -113,9 +122,10 @@ static int find_root(rk45_t *r, double t_lo, double *t_root)
         }
         /* no: the root is in [t_mid, t_hi] */
         t_lo = t_mid;
-        memcpy(g_lo, g_mid, (size_t)m * sizeof(double));
+        r->g_mid = r->g_lo;
+        r->g_lo = g_mid;
         side = 2;
-        imax = strongest(g_lo, g_hi, m, &unused);
+        imax = strongest(r->g_lo, r->g_hi, m, &unused);
         if (imax < 0) {
             break; /* round-off: keep t_hi */
         }
@@ -129,14 +139,18 @@ static int find_root(rk45_t *r, double t_lo, double *t_root)
 int rk45_check_roots(rk45_t *r, double t_lo, double *t, double *y)
 {
     if (r->n_roots > 0) {
-        memcpy(r->g_hi, r->g_n, (size_t)r->n_roots * sizeof(double));
         double t_root = r->t_n;
-        const int found = find_root(r, t_lo, &t_root);
+        int y_known = 0;
+        const int found = find_root(r, t_lo, &t_root, &y_known);
         if (found < 0) {
             return found;
         }
         if (found > 0) {
-            rk45_dense(r, t_root, 0, y);
+            if (y_known) {
+                memcpy(y, r->y_mid, (size_t)r->n * sizeof(double));
+            } else {
+                rk45_dense(r, t_root, 0, y);
+            }
             *t = t_root;
             r->t_lo = t_root;
             memcpy(r->g_lo, r->g_hi, (size_t)r->n_roots * sizeof(double)); /* g at the root */
@@ -153,4 +167,3 @@ int rk45_check_roots(rk45_t *r, double t_lo, double *t, double *y)
     }
     return RK45_SUCCESS;
 }
-
