@@ -12,12 +12,13 @@ With --perf (needs `perf`): the top entries of a `perf record` profile of each b
 law (self time, the share of all samples of that master process).
 
 Build the baseline from another checkout, e.g.
-    git worktree add /tmp/csfh-main main && cmake -S /tmp/csfh-main -B /tmp/csfh-main/build \\
+    git worktree add --detach /tmp/csfh-main main && cmake -S /tmp/csfh-main -B /tmp/csfh-main/build \\
         -G Ninja -DCSFH_PLATFORMS=host && cmake --build /tmp/csfh-main/build
     (binary: /tmp/csfh-main/build/binaries/csfh/linux64/csfh.so)
 
-Run: python benchmarks/bench_cs_steps.py --baseline PATH [--binary PATH] [--rounds 9]
-     [--repeats 2001] [--rtol 1e-6 1e-9] [--perf] [--master build/bench_cs_master]
+Run: python benchmarks/bench_cs_steps.py --baseline PATH [--binary PATH] [--rounds 21]
+     [--repeats 301] [--rtol 1e-6 1e-9] [--laws LN_spheres ...] [--perf]
+     [--master build/bench_cs_master]
 """
 
 from __future__ import annotations
@@ -87,16 +88,17 @@ def perf_top(master: Path, binary: Path, scene: Scene, law: str, rtol: float, n:
             text=True,
         ).stdout
     rows = [line.split() for line in report.splitlines() if line.strip()[:1].isdigit()]
-    return [f"{row[0]:>7} {row[-1]}" for row in rows[:n]]
+    return [f"{row[0]:>7} {row[2]}" for row in rows[:n] if len(row) > 2]
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--baseline", type=Path, required=True, help="the other build's csfh.so")
     ap.add_argument("--binary", type=Path, default=None, help="default: the FMU in use")
-    ap.add_argument("--rounds", type=int, default=9)
-    ap.add_argument("--repeats", type=int, default=2001, help="runs of the scene per master run")
+    ap.add_argument("--rounds", type=int, default=21)
+    ap.add_argument("--repeats", type=int, default=301, help="runs of the scene per master run")
     ap.add_argument("--rtol", type=float, nargs="+", default=[1e-6, 1e-9])
+    ap.add_argument("--laws", nargs="+", default=list(LAWS), choices=LAWS)
     ap.add_argument("--horizon", type=float, default=0.42, help="s (first three contacts)")
     ap.add_argument("--perf", action="store_true", help="also the perf profiles' top entries")
     ap.add_argument("--master", type=Path, default=default_master())
@@ -116,7 +118,7 @@ def main() -> None:
     )
     print(header)
     print("-" * len(header))
-    for law in LAWS:
+    for law in args.laws:
         for rtol in args.rtol:
             walls, same = timed_rounds(
                 args.master, binaries, scene, law, rtol, args.rounds, args.repeats
@@ -131,7 +133,7 @@ def main() -> None:
         if shutil.which("perf") is None:
             print("\nno perf: no profiles")
             return
-        for law in LAWS:
+        for law in args.laws:
             for name, binary in binaries.items():
                 print(f"\nperf, {law}, rtol {args.rtol[0]:g}, {name}: self time, top entries")
                 for line in perf_top(args.master, binary, scene, law, args.rtol[0], 12):
