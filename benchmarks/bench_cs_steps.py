@@ -9,11 +9,13 @@ medians over the rounds and the ratio baseline / this binary (> 1: this binary i
 whether both binaries end in bitwise the same state (the six states, printed to 17 digits).
 
 With --perf (needs `perf`): the top entries of a `perf record` profile of each binary for each
-law (self time, the share of all samples of that master process).
+law (self time, the share of all samples of that master process; the master's parsing of the
+start values before each run, e.g. __vfscanf_internal, is among them, outside the timed loop).
 
 Build the baseline from another checkout, e.g.
-    git worktree add --detach /tmp/csfh-main main && cmake -S /tmp/csfh-main -B /tmp/csfh-main/build \\
-        -G Ninja -DCSFH_PLATFORMS=host && cmake --build /tmp/csfh-main/build
+    git worktree add --detach /tmp/csfh-main main
+    cmake -S /tmp/csfh-main -B /tmp/csfh-main/build -G Ninja -DCSFH_PLATFORMS=host
+    cmake --build /tmp/csfh-main/build
     (binary: /tmp/csfh-main/build/binaries/csfh/linux64/csfh.so)
 
 Run: python benchmarks/bench_cs_steps.py --baseline PATH [--binary PATH] [--rounds 21]
