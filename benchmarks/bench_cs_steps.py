@@ -6,7 +6,8 @@ Each round runs the compiled master (master/bench_cs_master.c, built as build/be
 once with each binary, in turns (the same machine state for both); a run is `--repeats` runs of
 the scene on one re-used instance, timed as the median of its repeats. The table gives the
 medians over the rounds and the ratio baseline / this binary (> 1: this binary is faster), and
-whether both binaries end in bitwise the same state (the six states, printed to 17 digits).
+whether both binaries end in bitwise the same state (the six states, printed to 17 digits) with
+the same counts; the integrator steps and right-hand sides of one run.
 
 With --perf (needs `perf`): the top entries of a `perf record` profile of each binary for each
 law (self time, the share of all samples of that master process; the master's parsing of the
@@ -40,6 +41,8 @@ from csfh import load_scene
 from csfh.model.scene import Scene
 
 LAWS = ("LN_spheres", "LN_cylinders", "LN_ESDU")
+# read at the end of a run (the counters restart with fmi2Reset): contacts, steps, RHS
+COUNTS = ("contact.count", "diagnostics.integrator_steps", "diagnostics.rhs_evaluations")
 
 
 def timed_rounds(
@@ -50,10 +53,12 @@ def timed_rounds(
     rtol: float,
     rounds: int,
     repeats: int,
-) -> tuple[dict[str, list[float]], bool]:
-    """Loop times of each binary, in turns; whether their final states are bitwise equal."""
+) -> tuple[dict[str, list[float]], bool, list[int]]:
+    """Loop times of each binary, in turns; whether their final states and counts (COUNTS) are
+    bitwise equal; the counts of the last binary."""
     walls: dict[str, list[float]] = {name: [] for name in binaries}
     finals: dict[str, list[float]] = {}
+    counts: dict[str, list[int]] = {}
     for _ in range(rounds):
         for name, binary in binaries.items():
             run = run_c_master(
@@ -63,12 +68,16 @@ def timed_rounds(
                 rtol=rtol,
                 communication_step=1e-2,
                 repeats=repeats,
+                count=COUNTS,
                 binary=binary,
             )
             walls[name].append(run.loop_seconds)
             finals[name] = run.final
+            counts[name] = run.counts
     first, second = finals.values()
-    return walls, [x.hex() for x in first] == [x.hex() for x in second]
+    same = [x.hex() for x in first] == [x.hex() for x in second]
+    base_counts, this_counts = counts.values()
+    return walls, same and base_counts == this_counts, this_counts
 
 
 def perf_top(master: Path, binary: Path, scene: Scene, law: str, rtol: float, n: int) -> list[str]:
@@ -116,20 +125,20 @@ def main() -> None:
     )
     header = (
         f"{'model':<13} {'rtol':>6} | {'baseline [us]':>13} {'this [us]':>10} | "
-        f"{'ratio':>6} | {'bitwise':>7}"
+        f"{'ratio':>6} | {'bitwise':>7} | {'steps':>5} {'RHS':>5}"
     )
     print(header)
     print("-" * len(header))
     for law in args.laws:
         for rtol in args.rtol:
-            walls, same = timed_rounds(
+            walls, same, counts = timed_rounds(
                 args.master, binaries, scene, law, rtol, args.rounds, args.repeats
             )
             base, this = (statistics.median(walls[k]) for k in ("baseline", "this"))
             ratio = base / this if this > 0 else math.nan
             print(
                 f"{law:<13} {rtol:6.0e} | {1e6 * base:13.2f} {1e6 * this:10.2f} | "
-                f"{ratio:6.3f} | {'yes' if same else 'NO':>7}"
+                f"{ratio:6.3f} | {'yes' if same else 'NO':>7} | {counts[1]:5d} {counts[2]:5d}"
             )
     if args.perf:
         if shutil.which("perf") is None:
