@@ -94,6 +94,36 @@ def out_dir(args: argparse.Namespace, *default: str) -> Path:
     return check_output_directory(results_dir(args.out, *default))
 
 
+def add_execution_options(p: argparse.ArgumentParser, command: str) -> None:
+    """--out, --workers and --dask of a study of many runs (csfh.studies.execution): the output
+    directory keeps every finished run, so that an interrupted study resumes."""
+    p.add_argument(
+        "--out",
+        help="output directory, where finished runs are kept and reused (default: "
+        f"results/{command}/SCENE)",
+    )
+    p.add_argument(
+        "--workers",
+        type=positive_int,
+        metavar="N",
+        help="local processes (default: all cores; 1 = serial in this process)",
+    )
+    p.add_argument(
+        "--dask",
+        metavar="ADDRESS",
+        help="run on an existing Dask distributed scheduler, e.g. tcp://host:8786 (default: "
+        "local processes, see --workers)",
+    )
+
+
+def execution(args: argparse.Namespace) -> Any:
+    """How a study runs (csfh.studies.execution.Execution), from add_execution_options' options
+    and --quiet."""
+    from ..studies.execution import Execution
+
+    return Execution(Path(args.out) if args.out else None, args.workers, args.dask, args.quiet)
+
+
 def positive_int(text: str) -> int:
     try:
         value = int(text)
