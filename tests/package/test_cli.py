@@ -103,11 +103,29 @@ def test_stress_list_names_the_cases_and_runs_nothing() -> None:
     )
 
 
-def test_bad_option_values_are_refused_by_the_parser(capsys: pytest.CaptureFixture[str]) -> None:
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (
+            ["accuracy", "central", "--repeats", "0"],
+            "csfh accuracy: error: argument --repeats: '0' must be >= 1 (see csfh accuracy --help)",
+        ),
+        (
+            ["shock", "mems", "--workers", "x"],
+            "csfh shock: error: argument --workers: 'x' is not an integer (see csfh shock --help)",
+        ),
+        (["bogus"], "csfh: error: argument COMMAND: invalid choice: 'bogus'"),
+        ([], "csfh: error: the following arguments are required: COMMAND (see csfh --help)"),
+    ],
+)
+def test_a_bad_command_line_is_one_line(
+    argv: list[str], expected: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     with pytest.raises(SystemExit) as info:
-        main(["accuracy", "central", "--repeats", "0"])
+        main(argv)
     assert info.value.code == 2
-    assert "--repeats: '0' must be >= 1" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(expected), err
 
 
 def test_module_and_console_script_are_the_same_entry_point() -> None:

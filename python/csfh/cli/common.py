@@ -13,7 +13,7 @@ import math
 import re
 import textwrap
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from ..errors import CliError as CliError  # the commands' one-line error
 from ..scenes import BUILTIN_SCENES
@@ -26,13 +26,19 @@ NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infini
 
 
 class Parser(argparse.ArgumentParser):
-    """An argument parser that takes every negative number (-1e-3, -.5, -inf) as an option's
-    value, so that the option's own check names it; argparse takes only -5 and -0.5 so, and
-    reports "-1e-3" as a missing value. No option of csfh looks like a number."""
+    """An argument parser that reports a bad command line on one line, and takes every negative
+    number (-1e-3, -.5, -inf) as an option's value, so that the option's own check names it;
+    argparse takes only -5 and -0.5 so, and reports "-1e-3" as a missing value. No option of
+    csfh looks like a number."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = NEGATIVE_NUMBER
+
+    def error(self, message: str) -> NoReturn:
+        """A bad command line is one line, as every other error (argparse prints the usage
+        first); --help shows the usage."""
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
 
 
 EMPTY_PATH_OPTIONS = ("out", "export_ssp", "notes", "tolerance")
@@ -92,6 +98,36 @@ def out_dir(args: argparse.Namespace, *default: str) -> Path:
     from ..safepath import check_output_directory
 
     return check_output_directory(results_dir(args.out, *default))
+
+
+def add_execution_options(p: argparse.ArgumentParser, command: str) -> None:
+    """--out, --workers and --dask of a study of many runs (csfh.studies.execution): the output
+    directory keeps every finished run, so that an interrupted study resumes."""
+    p.add_argument(
+        "--out",
+        help="output directory, where finished runs are kept and reused (default: "
+        f"results/{command}/SCENE)",
+    )
+    p.add_argument(
+        "--workers",
+        type=positive_int,
+        metavar="N",
+        help="local processes (default: all cores; 1 = serial in this process)",
+    )
+    p.add_argument(
+        "--dask",
+        metavar="ADDRESS",
+        help="run on an existing Dask distributed scheduler, e.g. tcp://host:8786 (default: "
+        "local processes, see --workers)",
+    )
+
+
+def execution(args: argparse.Namespace) -> Any:
+    """How a study runs (csfh.studies.execution.Execution), from add_execution_options' options
+    and --quiet."""
+    from ..studies.execution import Execution
+
+    return Execution(Path(args.out) if args.out else None, args.workers, args.dask, args.quiet)
 
 
 def positive_int(text: str) -> int:

@@ -7,10 +7,9 @@ indices of the objectives."""
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 from typing import Any
 
-from .common import SCENE_HELP, CliError, add_command, add_quiet
+from .common import SCENE_HELP, add_command, add_execution_options, add_quiet, execution
 
 
 def register(sub: Any) -> None:
@@ -39,45 +38,15 @@ def register(sub: Any) -> None:
         action="store_true",
         help="the study's [quick] values: fewer samples, directions and generations",
     )
-    p.add_argument(
-        "--out",
-        help="output directory, where finished runs are kept (default: results/design/SCENE)",
-    )
-    p.add_argument(
-        "--workers",
-        metavar="N",
-        help="local processes (default: all cores; 1 = serial in this process)",
-    )
-    p.add_argument(
-        "--dask",
-        metavar="ADDRESS",
-        help="run on an existing Dask distributed scheduler, e.g. tcp://host:8786 (default: "
-        "local processes, see --workers)",
-    )
+    add_execution_options(p, "design")
     add_quiet(p)
     p.set_defaults(func=cmd_design)
 
 
-def _workers(text: str | None) -> int | None:
-    if text is None:
-        return None
-    try:
-        value = int(text)
-    except ValueError:
-        raise CliError(f"--workers = {text!r} is not an integer") from None
-    if value < 1:
-        raise CliError(f"--workers = {value} must be >= 1")
-    return value
-
-
 def cmd_design(args: argparse.Namespace) -> int:
     from ..studies.design.run import run_design
-    from ..studies.execution import Execution
 
-    how = Execution(
-        Path(args.out) if args.out else None, _workers(args.workers), args.dask, args.quiet
-    )
-    outcome = run_design(args.scene, how, args.study, quick=args.quick)
+    outcome = run_design(args.scene, execution(args), args.study, quick=args.quick)
     result, info = outcome.result, outcome.run_info
     if not args.quiet:
         for e in result["best_entries"]:

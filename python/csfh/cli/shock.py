@@ -7,11 +7,10 @@ from __future__ import annotations
 
 import argparse
 import math
-from pathlib import Path
 from typing import Any
 
 from ..studies.shock import DEFAULT_DIRECTIONS
-from .common import SCENE_HELP, CliError, add_command, add_quiet
+from .common import SCENE_HELP, CliError, add_command, add_execution_options, add_quiet, execution
 
 
 def register(sub: Any) -> None:
@@ -99,21 +98,7 @@ def _study_options(p: argparse.ArgumentParser) -> None:
         help="Monte Carlo samples per model (default: the file's [montecarlo] runs, else 200)",
     )
     p.add_argument("--seed", metavar="S", help="random seed >= 0 (default: the file's, else 1)")
-    p.add_argument(
-        "--out",
-        help="output directory, where finished runs are kept (default: results/shock/SCENE)",
-    )
-    p.add_argument(
-        "--workers",
-        metavar="N",
-        help="local processes (default: all cores; 1 = serial in this process)",
-    )
-    p.add_argument(
-        "--dask",
-        metavar="ADDRESS",
-        help="run on an existing Dask distributed scheduler, e.g. tcp://host:8786 (default: "
-        "local processes, see --workers)",
-    )
+    add_execution_options(p, "shock")
     p.add_argument(
         "--list-conditions", action="store_true", help="print the standard conditions and exit"
     )
@@ -218,7 +203,6 @@ def _print(outcome: Any, quiet: bool) -> None:
 
 
 def cmd_shock(args: argparse.Namespace) -> int:
-    from ..studies.execution import Execution
     from ..studies.shock import conditions
     from ..studies.shock.run import run_shock
 
@@ -229,8 +213,6 @@ def cmd_shock(args: argparse.Namespace) -> int:
     if args.scene is None:
         raise CliError("shock needs a SCENE (a built-in scene or a .toml file)")
     request = _request(args)
-    workers = _count("--workers", args.workers, 1)
-    how = Execution(Path(args.out) if args.out else None, workers, args.dask, args.quiet)
-    outcome = run_shock(request, how)
+    outcome = run_shock(request, execution(args))
     _print(outcome, args.quiet)
     return 0 if outcome.passed else 1

@@ -9,27 +9,21 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from .common import CliError, add_command, add_quiet, positive_float, positive_int
+from .common import (
+    CliError,
+    add_command,
+    add_execution_options,
+    add_quiet,
+    execution,
+    positive_float,
+    positive_int,
+)
 
 
-def _execution_options(p: argparse.ArgumentParser, command: str) -> None:
-    p.add_argument(
-        "--out",
-        help="output directory, where finished runs are kept and reused (default: "
-        f"results/{command}/SCENE)",
-    )
-    p.add_argument(
-        "--workers",
-        type=positive_int,
-        metavar="N",
-        help="local processes (default: all cores; 1 = serial in this process)",
-    )
-    p.add_argument(
-        "--dask",
-        metavar="ADDRESS",
-        help="run on an existing Dask distributed scheduler, e.g. tcp://host:8786 (default: "
-        "local processes, see --workers)",
-    )
+def _batch_options(p: argparse.ArgumentParser, command: str) -> None:
+    """How the runs of a sweep or tolerance study are made: where, on what, through which
+    interface."""
+    add_execution_options(p, command)
     p.add_argument(
         "--interface",
         choices=("me", "cs"),
@@ -82,7 +76,7 @@ def register(sub: Any) -> None:
         action="store_true",
         help="reduced sweep: R1, m1, h over 0.2 s (unless --params/--stop-time)",
     )
-    _execution_options(p, "sweep")
+    _batch_options(p, "sweep")
     p.set_defaults(func=cmd_sweep)
 
     p = add_command(
@@ -117,7 +111,7 @@ def register(sub: Any) -> None:
         help="models (default: the file's [montecarlo] models, else LN_spheres LN_cylinders "
         "LN_ESDU Moreau)",
     )
-    _execution_options(p, "tolerance")
+    _batch_options(p, "tolerance")
     p.set_defaults(func=cmd_tolerance)
 
 
@@ -136,12 +130,6 @@ def _notes(args: argparse.Namespace) -> str | None:
         raise CliError(f"--notes {path}: cannot be read ({exc.strerror or exc})") from None
 
 
-def _execution(args: argparse.Namespace) -> Any:
-    from ..studies.execution import Execution
-
-    return Execution(Path(args.out) if args.out else None, args.workers, args.dask, args.quiet)
-
-
 def _counts(report: Any) -> str:
     return (
         f"{report.total} runs ({report.computed} computed, {report.reused} reused, "
@@ -156,7 +144,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene)
     outcome = run_sweep(
         scene,
-        _execution(args),
+        execution(args),
         models=args.models,
         params=args.params,
         quick=args.quick,
@@ -182,7 +170,7 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
     notes = _notes(args)
     outcome = run_tolerance(
         args.study,
-        _execution(args),
+        execution(args),
         runs=args.runs,
         seed=args.seed,
         models=args.models,

@@ -203,26 +203,11 @@ class Evaluator:
     def row(self, task: Task) -> dict[str, Any]:
         """One direction of a design, with the fields of shock.json's per-direction rows."""
         s = self.store.summary(task.key)
-        stress, pressure = s["peak_flexure_stress"], s["peak_contact_pressure"]
-        m_f = shock.margin(stress, self.allowables["flexure.stress_allowable"])
-        m_c = shock.margin(pressure, self.allowables["contact.pressure_allowable"])
         if s["contact_at_end"]:
             settling = self.spec.stop_time
         else:
             settling = 0.0 if s["last_release"] is None else float(s["last_release"])
-        return {
-            "direction": dict(task.meta)["direction"],
-            "flexure_stress": stress,
-            "contact_pressure": pressure,
-            "flexure_margin": m_f,
-            "contact_margin": m_c,
-            "passed": bool(m_f >= 0.0 and m_c >= 0.0),
-            "contacts": s["contacts"],
-            "first_contact": s["first_contact"],
-            "peak_F_N": s["peak_F_N"],
-            "steps": s["steps"],
-            "settling_time": settling,
-        }
+        return {**shock.direction_row(task, s, self.allowables), "settling_time": settling}
 
     def static(self, values: dict[str, float]) -> dict[str, float]:
         key = tuple(sorted(values.items()))

@@ -106,6 +106,27 @@ def margin(peak: float, allowable: float) -> float:
     return 1.0 - peak / allowable
 
 
+def direction_row(task: Task, summary: dict[str, Any], allow: dict[str, float]) -> dict[str, Any]:
+    """One direction of shock.json, from its run's summary: the peak flexure stress and contact
+    pressure, their margins against the allowables and the pass (both margins >= 0), the
+    contacts, the first contact, the peak normal force and the steps."""
+    stress, pressure = summary["peak_flexure_stress"], summary["peak_contact_pressure"]
+    m_f = margin(stress, allow["flexure.stress_allowable"])
+    m_c = margin(pressure, allow["contact.pressure_allowable"])
+    return {
+        "direction": dict(task.meta)["direction"],
+        "flexure_stress": stress,
+        "contact_pressure": pressure,
+        "flexure_margin": m_f,
+        "contact_margin": m_c,
+        "passed": bool(m_f >= 0.0 and m_c >= 0.0),
+        "contacts": summary["contacts"],
+        "first_contact": summary["first_contact"],
+        "peak_F_N": summary["peak_F_N"],
+        "steps": summary["steps"],
+    }
+
+
 def analyse_directions(
     spec: ShockSpec, tasks: Sequence[Task], store: ResultStore
 ) -> dict[str, Any]:
@@ -115,26 +136,7 @@ def analyse_directions(
     allow = allowables(spec.scene)
     out: dict[str, Any] = {"allowables": allow, "models": {}}
     for model in spec.models:
-        rows = []
-        for t in (t for t in tasks if t.model == model):
-            s = store.summary(t.key)
-            stress, pressure = s["peak_flexure_stress"], s["peak_contact_pressure"]
-            m_f = margin(stress, allow["flexure.stress_allowable"])
-            m_c = margin(pressure, allow["contact.pressure_allowable"])
-            rows.append(
-                {
-                    "direction": dict(t.meta)["direction"],
-                    "flexure_stress": stress,
-                    "contact_pressure": pressure,
-                    "flexure_margin": m_f,
-                    "contact_margin": m_c,
-                    "passed": bool(m_f >= 0.0 and m_c >= 0.0),
-                    "contacts": s["contacts"],
-                    "first_contact": s["first_contact"],
-                    "peak_F_N": s["peak_F_N"],
-                    "steps": s["steps"],
-                }
-            )
+        rows = [direction_row(t, store.summary(t.key), allow) for t in tasks if t.model == model]
         rows.sort(key=lambda r: r["direction"])
         worst = min(rows, key=lambda r: min(r["flexure_margin"], r["contact_margin"]))
         out["models"][model] = {
