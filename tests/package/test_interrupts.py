@@ -96,3 +96,46 @@ def test_ctrl_c_from_outside_at_several_moments(tmp_path: Path, delay: float) ->
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     _check(proc.returncode, err)
+
+
+# Co-simulation: the communication loop runs in C and calls back into Python only through the
+# FMU's logger. A body so light that the first impact's step size underflows makes the FMU log
+# an error mid-way; the wrapped logger sends SIGINT on its first message.
+IN_LOGGER = """
+import os, signal, sys  # noqa: E401
+from csfh.model import fmus
+
+original = fmus._dispatch
+
+
+def wrapped(*args):
+    os.kill(os.getpid(), signal.SIGINT)
+    return original(*args)
+
+
+fmus._dispatch = wrapped
+from csfh.cli.main import main  # noqa: E402
+
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_ctrl_c_inside_the_fmu_logger_of_a_co_simulation(tmp_path: Path) -> None:
+    scene = tmp_path / "light.toml"
+    scene.write_text(
+        (Path(__file__).resolve().parents[2] / "python/csfh/scenes/central.toml")
+        .read_text()
+        .replace("stop_time = 1.0", "stop_time = 0.2")
+        + '\n[parameters]\n"body1.m" = 1e-30\n'
+    )
+    args = ["run", str(scene), "--law", "LN_spheres", "--interface", "cs", "--quiet"]
+    proc = subprocess.run(
+        [sys.executable, "-c", IN_LOGGER, *args, "--out", str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+        env=csfh_env(),
+        timeout=120,
+        check=False,
+    )
+    _check(proc.returncode, proc.stderr)
+    assert not (tmp_path / "out" / "LN_spheres.csv").exists()

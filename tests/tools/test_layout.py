@@ -20,6 +20,7 @@ LAYERS: dict[str, int] = {
     "csfh.errors": 0,  # below the rest of the foundation: every module raises its types
     "csfh.paths": 1,
     "csfh.progress": 1,
+    "csfh.interrupts": 1,
     "csfh.scenes": 1,
     "csfh.safepath": 1,  # the output folders' path checks, under output
     "csfh.output": 2,

@@ -24,6 +24,7 @@ import numpy as np
 
 from .. import paths
 from ..errors import InstallError
+from ..interrupts import HeldInterrupt
 from ..model._csfh_variables import BATCH_ABI_VERSION as ABI_VERSION
 from .fmi2_slave import FmiCallError
 
@@ -156,11 +157,12 @@ class CSteps:
         if m > self._capacity:
             self._grow(m)
         times, reals, integers, booleans = self._addresses
-        t0 = perf_counter()
-        done = self._lib.csfh_cs_steps(
-            self._loop, k_first, k_last, t, times, reals, integers, booleans, self._failure
-        )
-        seconds = perf_counter() - t0
+        with HeldInterrupt():  # the FMU's logger is a Python callback
+            t0 = perf_counter()
+            done = self._lib.csfh_cs_steps(
+                self._loop, k_first, k_last, t, times, reals, integers, booleans, self._failure
+            )
+            seconds = perf_counter() - t0
         if done < 0:
             raise ValueError(f"csfh_cs_steps: bad arguments (steps {k_first} .. {k_last})")
         # copies: the buffers are the next chunk's

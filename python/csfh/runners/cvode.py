@@ -14,49 +14,18 @@ returned."""
 from __future__ import annotations
 
 import math
-import signal
-import threading
 from ctypes import byref, c_int, c_long, c_void_p, cast
-from types import FrameType
 from typing import Any
 
 import numpy as np
 
 from ..errors import SimulationError
+from ..interrupts import HeldInterrupt
 
 CV_ONE_STEP = 2  # cvode.h (fmpy's binding leaves it commented out)
 CV_TSTOP_RETURN = 1  # cvode.h
 MAX_NUM_STEPS = 100_000
 """CVODE's limit of internal steps per call (one call is one step here)."""
-
-
-class HeldInterrupt:
-    """A block in which SIGINT sets `pending` instead of raising KeyboardInterrupt (which,
-    raised inside a ctypes callback, would be printed and lost); KeyboardInterrupt is raised
-    when the block ends. Only where Python's own SIGINT handler is in place (the main thread;
-    not in worker processes, which ignore SIGINT)."""
-
-    def __init__(self) -> None:
-        self.pending = False
-        self._previous: Any = None
-
-    def _handler(self, signum: int, frame: FrameType | None) -> None:
-        self.pending = True
-
-    def __enter__(self) -> HeldInterrupt:
-        self.pending = False
-        held = threading.current_thread() is threading.main_thread() and (
-            signal.getsignal(signal.SIGINT) is signal.default_int_handler
-        )
-        self._previous = signal.signal(signal.SIGINT, self._handler) if held else None
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        if self._previous is not None:
-            signal.signal(signal.SIGINT, self._previous)
-            self._previous = None
-        if self.pending and exc[0] is None:
-            raise KeyboardInterrupt
 
 
 def _cvode_function(name: str, argtypes: list[Any]) -> Any:
