@@ -2,9 +2,9 @@
  * non-stiff systems: the method of Dormand and Prince (7 stages, first same as last, so 6
  * right-hand sides per accepted step), local error of the embedded 4th-order solution in a
  * weighted RMS norm, PI step-size control, Shampine's free 4th-order continuous extension, and
- * root finding on it (Illinois regula falsi, as CVODE does on its interpolant). A stiffness
- * indicator (h times the local Lipschitz estimate from the last two stages, against the method's
- * stability boundary) tells the caller when the steps are held by stability, not accuracy.
+ * root finding on it (Muller's parabola in a bracket). A stiffness indicator (h times the local
+ * Lipschitz estimate from the last two stages, against the method's stability boundary) tells
+ * the caller when the steps are held by stability, not accuracy.
  *
  * Why our own and not SUNDIALS ARKODE's ERKStep (same Dormand-Prince table, root finding and
  * dense output): for six states its per-step bookkeeping (vector operations through function

@@ -5,6 +5,7 @@
  * given first step, the self-contained step records, the stiffness indicator on a stiff
  * problem, and the failures: an unrecoverable right-hand side, a recoverable one that keeps
  * failing, a failing root function, bad input. */
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -83,6 +84,17 @@ static void test_decay_and_tolerance(void)
                "the error falls with the tolerance");
 }
 
+/* The root returned lies past the sign change (sign `before` is cos's before the root) and
+ * within the documented 100 eps (|t_n| + |h|) of it: the dense output there still has `before`. */
+static void check_root_bracket(rk45_t *r, double t, double x, double before)
+{
+    const double ttol = 100.0 * DBL_EPSILON * (fabs(rk45_current_time(r)) + rk45_last_step(r));
+    double w[2];
+    rk45_dense(r, t - ttol, 0, w);
+    CHECK_TRUE(before * x <= 0.0, TFMT("past the sign change at t = %.17g", t));
+    CHECK_TRUE(before * w[0] > 0.0, TFMT("within 100 eps (|t_n| + |h|) of it at t = %.17g", t));
+}
+
 static void test_oscillator_roots(void)
 {
     const double w = 3.0, rtol = 1e-10;
@@ -103,6 +115,7 @@ static void test_oscillator_roots(void)
             const double exact = (roots + 0.5) * TEST_PI / w;
             CHECK_ABS(t, exact, 1e-9, TFMT("root %d at (k + 1/2) pi / w", roots));
             CHECK_ABS(y[0], 0.0, 1e-9, "the state at the root is on the zero");
+            check_root_bracket(r, t, y[0], roots % 2 == 0 ? 1.0 : -1.0);
             roots++;
         } else {
             CHECK_ABS(y[0], cos(w * t), 1e-8, "the solution at the step's end");
@@ -110,6 +123,11 @@ static void test_oscillator_roots(void)
         }
     }
     CHECK_INT(roots, 10, "every root of cos(3 t) in [0, 10] s");
+    rk45_stats_t st;
+    rk45_get_stats(r, &st);
+    /* a superlinear search: bisection to the tolerance would take ~40 evaluations per root */
+    const long search = st.roots - st.steps - 1;
+    CHECK_TRUE(search <= 6 * roots, "at most 6 evaluations of g per root on average");
     rk45_free(r);
 }
 
@@ -141,6 +159,9 @@ static void test_several_roots_in_one_step(void)
     CHECK_ABS(t, 0.5, 1e-15, "at the step's end");
     CHECK_INT(s1.steps - s0.steps, 1, "no new step for the roots inside the last one");
     CHECK_TRUE(roots >= 1, "at least one root found inside the long step");
+    /* the long step's g is far from linear: a parabola follows it to the root, a regula falsi
+     * creeps along it (~60 evaluations), bisection to the tolerance would take ~45 */
+    CHECK_TRUE(s1.roots - s0.roots <= 16 * roots, "at most 16 evaluations of g per root");
     rk45_free(r);
 }
 
