@@ -269,6 +269,48 @@ def test_batch_is_bitwise_the_single_runs() -> None:
         assert len({batch.summary(i)["max_flexure_stress"] for i in range(3)}) == 3
 
 
+def test_batch_reductions_are_those_of_the_recorded_points() -> None:
+    """Without a record the master reads the final values only at the stop time and each value
+    reference once: its reductions are bitwise those of the outputs it records at every point,
+    on one instance reset between runs (a refused run in the middle makes it anew)."""
+    scene = load_scene("csfh")
+    sets = [
+        {"contact.R1": 0.18, "shock.peak": 60 * G_STANDARD, "shock.start": 0.02},
+        {"contact.R1": 0.25},  # R1 > R2: refused
+        {"contact.R1": 0.1801, "flexure.track_stress_peak": True},
+    ]
+    sets = [
+        {"shock.peak": 0.0, "shock.start": 0.0, "flexure.track_stress_peak": False, **s}
+        for s in sets
+    ]
+    finals = tuple(
+        (name, "final") for name in ("contact.F_N_peak", "contact.count", "contact.active")
+    )
+    outputs = (
+        *finals,
+        ("flexure.stress_max_peak", "max"),
+        ("contact.F_N_peak", "absmax"),
+        ("contact.F_N", "min"),
+        ("contact.F_N_peak", "time_of_max"),
+    )
+    kw: dict[str, Any] = {"stop_time": 0.2, "communication_step": 1e-3, "check": False}
+    plain = cs_batch(scene, "LN_cylinders", sets, outputs=outputs, **kw)
+    recorded = cs_batch(scene, "LN_cylinders", sets, outputs=outputs, record=True, **kw)
+    assert list(plain.status) == list(recorded.status) == [0, -1, 0]
+    n = len(outputs)  # a record adds the table's outputs after these
+    assert np.array_equal(plain.results, recorded.results[:, :n], equal_nan=True)
+    for i in (0, 2):
+        for j, (name, _) in enumerate(finals):
+            assert plain.results[i, j] == recorded.column(i, name)[-1]
+        assert (
+            plain.value(i, "contact.F_N_peak", "absmax")
+            == recorded.column(i, "contact.F_N_peak").max()
+        )
+    assert plain.value(0, "contact.count") > 0
+    alone = cs_batch(scene, "LN_cylinders", sets[2:], outputs=outputs, **kw)
+    assert np.array_equal(alone.results[0], plain.results[2])
+
+
 def test_batch_reports_a_refused_run_and_runs_the_others() -> None:
     scene = load_scene("csfh")
     sets = [  # run 1: R1 > R2, refused
