@@ -311,6 +311,47 @@ def test_batch_reductions_are_those_of_the_recorded_points() -> None:
     assert np.array_equal(alone.results[0], plain.results[2])
 
 
+def _start_values_one_by_one(scene: Any, law: str | None, extra: dict[str, Any] | None) -> list:
+    """What a run sets, worked out for it alone: the scene's parameters with the law, the
+    overrides, the start state, the inputs, each value as its FMI type is set."""
+    from csfh.runners.fmu import STATE_NAMES
+
+    values = dict(scene.parameter_values(law))
+    values.update({k: model_info.coerce(k, v) for k, v in (extra or {}).items()})
+    values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
+    values.update(scene.inputs)
+    kinds = {"Real": float, "Boolean": bool}
+    out = []
+    for name, value in values.items():
+        kind = model_info.variables()[name].type
+        kind = kind if kind in kinds else "Integer"
+        out.append((name, kind, kinds.get(kind, int)(value)))
+    return out
+
+
+def test_start_values_of_runs_are_each_runs_start_values() -> None:
+    """The batch's start values (the scene's part worked out once) are those of each run alone:
+    the same names, FMI types, values and order, whatever the overrides (new names, a Boolean,
+    an Enumeration by name, a start state, which the scene's start state replaces)."""
+    from csfh.runners.fmu import start_values_of_runs
+
+    scene = load_scene("csfh")
+    extras: list[dict[str, Any] | None] = [
+        None,
+        {},
+        {"contact.R1": 0.1801, "flexure.track_stress_peak": True},
+        {"solver.method": "RK45", "shock.peak": 5.0, "contact.law_number": 3},
+        {"body1.x": 1e-3, "contact.cr": 0.5},
+    ]
+    for law in ("LN_cylinders", None):
+        runs = start_values_of_runs(scene, law, extras)
+        for run, extra in zip(runs, extras, strict=True):
+            alone = _start_values_one_by_one(scene, law, extra)
+            assert run == alone == start_values(scene, law, extra)
+            assert [type(v) for _, _, v in run] == [type(v) for _, _, v in alone]
+        assert runs[2] != runs[0] != runs[3]
+
+
 def test_batch_reports_a_refused_run_and_runs_the_others() -> None:
     scene = load_scene("csfh")
     sets = [  # run 1: R1 > R2, refused
