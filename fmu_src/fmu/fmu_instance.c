@@ -36,6 +36,9 @@ static unsigned char refresh_kind(const csfh_variable_t *v)
         v->offset < fmu_model.der_offset + (size_t)fmu_model.n_states * sizeof(double)) {
         return FMU_REFRESH_DERIVATIVES;
     }
+    if (fmu_model.subset_outputs != NULL && fmu_model.in_subset(v->offset)) {
+        return FMU_REFRESH_SUBSET;
+    }
     return FMU_REFRESH_OUTPUTS;
 }
 
@@ -180,9 +183,13 @@ fmu_status_t fmu_update_derivatives(fmu_instance_t *inst, const char *function)
     return FMU_OK;
 }
 
-fmu_status_t fmu_update_outputs(fmu_instance_t *inst, const char *function)
+/* The outputs by `compute` (fmu_model.outputs or .subset_outputs), up to date as `level`
+ * (FMU_OUTPUTS_*) unless they are already; a model warning is logged once per instance. */
+static fmu_status_t compute_outputs(fmu_instance_t *inst, const char *function,
+                                    int (*compute)(void *m, char *msg, size_t msg_size),
+                                    int level)
 {
-    if (inst->outputs_valid) {
+    if (inst->outputs_valid >= level) {
         return FMU_OK;
     }
     if (fmu_prepare(inst, function) != FMU_OK) {
@@ -191,12 +198,12 @@ fmu_status_t fmu_update_outputs(fmu_instance_t *inst, const char *function)
     fmu_flush(inst); /* the model's outputs over the communication step (peaks) */
     char msg[FMU_MSG_SIZE];
     msg[0] = '\0';
-    const int status = fmu_model.outputs(inst->model, msg, sizeof(msg));
+    const int status = compute(inst->model, msg, sizeof(msg));
     if (status == FMU_MODEL_NONFINITE) {
         FMU_LOG_ERROR(inst, "%s: %s", function, msg);
         return FMU_ERROR;
     }
-    inst->outputs_valid = 1;
+    inst->outputs_valid = level;
     if (status == FMU_MODEL_WARNING) {
         if (!inst->warned_outputs) {
             inst->warned_outputs = 1;
@@ -205,6 +212,16 @@ fmu_status_t fmu_update_outputs(fmu_instance_t *inst, const char *function)
         return FMU_WARNING;
     }
     return FMU_OK;
+}
+
+fmu_status_t fmu_update_outputs(fmu_instance_t *inst, const char *function)
+{
+    return compute_outputs(inst, function, fmu_model.outputs, FMU_OUTPUTS_ALL);
+}
+
+fmu_status_t fmu_update_output_subset(fmu_instance_t *inst, const char *function)
+{
+    return compute_outputs(inst, function, fmu_model.subset_outputs, FMU_OUTPUTS_SUBSET);
 }
 
 int fmu_event_update(fmu_instance_t *inst)

@@ -43,6 +43,8 @@ fmu_status_t fmu_update_derivatives(fmu_instance_t *inst, const char *function);
 /* Outputs at the current state; logs a model warning once per instance. FMU_OK, FMU_WARNING or
  * FMU_ERROR (logged, prefixed with `function`). */
 fmu_status_t fmu_update_outputs(fmu_instance_t *inst, const char *function);
+/* Only fmu_model.subset_outputs (at least: all outputs that are up to date stay so). */
+fmu_status_t fmu_update_output_subset(fmu_instance_t *inst, const char *function);
 /* A directional (adjoint 0: sensitivity = J seed) or adjoint (1: sensitivity = J^T seed)
  * derivative, J = d unknowns / d knowns (fmu_derivatives.c); FMI 2.0 passes n_seed = n_knowns
  * and n_sensitivity = n_unknowns. FMU_OK, or FMU_ERROR (logged: a bad argument, an unknown or a

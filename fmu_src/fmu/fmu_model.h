@@ -107,6 +107,12 @@ typedef struct {
     /* Fill the outputs at the current time, state and inputs: FMU_MODEL_OK, FMU_MODEL_WARNING
      * (message) or FMU_MODEL_NONFINITE (message). */
     int (*outputs)(void *m, char *msg, size_t msg_size);
+    /* A subset of the outputs alone (both NULL: none), for a master that reads only those at
+     * every communication point: subset_outputs fills the outputs whose fields in_subset
+     * accepts (by offset in the model struct), each with the value outputs() gives it, and
+     * returns as outputs() does; every field comm_step_begins takes from the outputs is in it. */
+    int (*subset_outputs)(void *m, char *msg, size_t msg_size);
+    int (*in_subset)(size_t offset);
     /* Add co-simulation integrator steps, and Jacobians formed, to the model's counters (may be
      * NULL). */
     void (*add_integrator_steps)(void *m, long steps);

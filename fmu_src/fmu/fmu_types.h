@@ -88,7 +88,7 @@ struct fmu_instance {
     unsigned int log_categories;
     fmu_state_t state;
     int prepared;           /* model.d is valid for the current parameters */
-    int outputs_valid;      /* model.out matches the current state/inputs */
+    int outputs_valid;      /* model.out matches the current state/inputs: FMU_OUTPUTS_* */
     int derivatives_valid;  /* model.der matches the current state/inputs */
     int warned_outputs;     /* the model's output warning (e.g. the ESDU clamp) was logged */
     /* experiment */
@@ -132,7 +132,16 @@ typedef struct fmu_vr_get {
     unsigned char boolean; /* stored as an int read as 0 or 1 */
 } fmu_vr_get_t;
 
-enum { FMU_REFRESH_NONE, FMU_REFRESH_PREPARE, FMU_REFRESH_DERIVATIVES, FMU_REFRESH_OUTPUTS };
+enum {
+    FMU_REFRESH_NONE,
+    FMU_REFRESH_PREPARE,
+    FMU_REFRESH_DERIVATIVES,
+    FMU_REFRESH_OUTPUTS,
+    FMU_REFRESH_SUBSET /* an output of fmu_model.subset_outputs */
+};
+
+/* How much of model.out is up to date (outputs_valid): nothing, the model's subset, all. */
+enum { FMU_OUTPUTS_NONE, FMU_OUTPUTS_SUBSET, FMU_OUTPUTS_ALL };
 
 /* ------------------------------------------------------------------------------------------ */
 /* the instance's inline helpers */

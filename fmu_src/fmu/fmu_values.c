@@ -43,9 +43,30 @@ static fmu_status_t refresh(fmu_instance_t *inst, unsigned char what, const char
         return fmu_update_derivatives(inst, function);
     case FMU_REFRESH_OUTPUTS:
         return fmu_update_outputs(inst, function);
+    case FMU_REFRESH_SUBSET:
+        return fmu_update_output_subset(inst, function);
     default:
         return FMU_OK;
     }
+}
+
+/* Whether the outputs a reference needs (FMU_REFRESH_OUTPUTS or _SUBSET) are up to date. */
+static inline int up_to_date(const fmu_instance_t *inst, unsigned char refresh)
+{
+    return (refresh == FMU_REFRESH_OUTPUTS && inst->outputs_valid == FMU_OUTPUTS_ALL) ||
+           (refresh == FMU_REFRESH_SUBSET && inst->outputs_valid != FMU_OUTPUTS_NONE);
+}
+
+/* Whether one of the references vr[0 .. n) needs all the outputs: then a subset read before it
+ * computes them all at once, not the subset first. */
+static int needs_all(const fmu_instance_t *inst, const unsigned int vr[], size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] < inst->n_vr_index && inst->vr_get[vr[i]].refresh == FMU_REFRESH_OUTPUTS) {
+            return 1;
+        }
+    }
+    return 0;
 }
 
 /* The value at p (of the reference's entry e) into value[i], as `kind`. */
@@ -89,9 +110,12 @@ fmu_status_t fmu_get_values(fmu_instance_t *inst, const char *function, const un
             return FMU_ERROR;
         }
         /* up-to-date outputs (the common case) are seen here, without a call per value */
-        if (e->refresh != FMU_REFRESH_NONE &&
-            !(e->refresh == FMU_REFRESH_OUTPUTS && inst->outputs_valid)) {
-            const fmu_status_t s = refresh(inst, e->refresh, function);
+        if (e->refresh != FMU_REFRESH_NONE && !up_to_date(inst, e->refresh)) {
+            const unsigned char what =
+                e->refresh == FMU_REFRESH_SUBSET && needs_all(inst, vr + i + 1, nvr - i - 1)
+                    ? FMU_REFRESH_OUTPUTS
+                    : e->refresh;
+            const fmu_status_t s = refresh(inst, what, function);
             if (s > FMU_WARNING) {
                 return s;
             }

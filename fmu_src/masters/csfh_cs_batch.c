@@ -57,117 +57,127 @@ static void call_failed(run_log_t *log, const char *call, fmi2Status s)
     log->have_error = 1;
 }
 
-/* One output's reduction: its value x at time t (first: at the start) into acc (held: the
- * largest value so far, for the time of the maximum; trigger: the value of the output it
- * waits for). */
-typedef void (*reduce_fn)(double x, double t, int first, double trigger, double *acc,
-                          double *held);
-
-static void reduce_final(double x, double t, int first, double trigger, double *acc, double *held)
+/* x against the extreme so far (first: there is none yet), for the largest (sign 1) or the
+ * smallest (sign -1) value. */
+static inline double extreme(double x, double acc, int first, double sign)
 {
-    (void)t, (void)first, (void)trigger, (void)held;
-    *acc = x;
+    return first || sign * x > sign * acc ? x : acc;
 }
 
-static void reduce_max(double x, double t, int first, double trigger, double *acc, double *held)
+static inline void first_when(double x, int first, double trigger, double *acc)
 {
-    (void)t, (void)trigger, (void)held;
-    *acc = first || x > *acc ? x : *acc;
+    *acc = first ? NAN : *acc;
+    *acc = isnan(*acc) && trigger > 0.0 ? x : *acc;
 }
 
-static void reduce_min(double x, double t, int first, double trigger, double *acc, double *held)
+static inline void time_of_max(double x, double t, int first, double *acc, double *held)
 {
-    (void)t, (void)trigger, (void)held;
-    *acc = first || x < *acc ? x : *acc;
-}
-
-static void reduce_absmax(double x, double t, int first, double trigger, double *acc,
-                          double *held)
-{
-    (void)t, (void)trigger, (void)held;
-    *acc = first || fabs(x) > *acc ? fabs(x) : *acc;
-}
-
-static void reduce_first_when(double x, double t, int first, double trigger, double *acc,
-                              double *held)
-{
-    (void)t, (void)held;
-    if (first) {
-        *acc = NAN;
-    }
-    if (isnan(*acc) && trigger > 0.0) {
-        *acc = x;
-    }
-}
-
-static void reduce_time_of_max(double x, double t, int first, double trigger, double *acc,
-                               double *held)
-{
-    (void)trigger;
     if (first || x > *held) {
         *held = x;
         *acc = t;
     }
 }
 
-static const reduce_fn REDUCTIONS[] = {
-    [CSFH_BATCH_FINAL] = reduce_final,
-    [CSFH_BATCH_MAX] = reduce_max,
-    [CSFH_BATCH_MIN] = reduce_min,
-    [CSFH_BATCH_ABSMAX] = reduce_absmax,
-    [CSFH_BATCH_FIRST_WHEN] = reduce_first_when,
-    [CSFH_BATCH_TIME_OF_MAX] = reduce_time_of_max,
-};
-
-/* The outputs (already read into v) enter their reductions at time t (an unknown reduction is
- * the final value). */
-static void reduce(const csfh_cs_batch_spec_t *spec, const double *v, double t, int first,
-                   double *acc, double *max_for_time)
+/* One output's reduction at a communication point: its value x at time t (first: the start)
+ * into acc (held: the largest value so far, for the time of the maximum; trigger: the value of
+ * the output it waits for). */
+static inline void reduce_one(int how, double x, double t, int first, double trigger,
+                              double *acc, double *held)
 {
-    const int n_reductions = (int)(sizeof(REDUCTIONS) / sizeof(REDUCTIONS[0]));
-    for (size_t j = 0; j < spec->n_out; j++) {
-        const int how = spec->out_reduce[j];
-        const reduce_fn f = how >= 0 && how < n_reductions ? REDUCTIONS[how] : reduce_final;
-        const double trigger = how == CSFH_BATCH_FIRST_WHEN ? v[spec->out_arg[j]] : 0.0;
-        f(v[j], t, first, trigger, &acc[j], &max_for_time[j]);
+    switch (how) {
+    case CSFH_BATCH_MAX:
+        *acc = extreme(x, *acc, first, 1.0);
+        break;
+    case CSFH_BATCH_MIN:
+        *acc = extreme(x, *acc, first, -1.0);
+        break;
+    case CSFH_BATCH_ABSMAX:
+        *acc = extreme(fabs(x), *acc, first, 1.0);
+        break;
+    case CSFH_BATCH_FIRST_WHEN:
+        first_when(x, first, trigger, acc);
+        break;
+    case CSFH_BATCH_TIME_OF_MAX:
+        time_of_max(x, t, first, acc, held);
+        break;
+    default: /* CSFH_BATCH_FINAL, and an unknown reduction: the final value */
+        *acc = x;
+        break;
     }
 }
 
-/* The outputs grouped by type, so that each step reads them in one call per type. */
+/* A set of outputs read together: each value reference once per type (an output reduced two
+ * ways is read once), in one call per type. */
 typedef struct {
-    size_t n[3];                       /* per type: how many */
-    fmi2ValueReference vr[3][MAX_OUT]; /* their value references */
-    size_t index[3][MAX_OUT];          /* their places among the outputs */
-} out_groups_t;
+    size_t n_vr[3];                    /* per type: how many references */
+    fmi2ValueReference vr[3][MAX_OUT]; /* per type: the references */
+    size_t n;                          /* the outputs of the set */
+    size_t out[MAX_OUT];               /* their places among the outputs */
+    int type[MAX_OUT];                 /* their types (0 Real, 1 Integer, 2 Boolean) */
+    size_t slot[MAX_OUT];              /* their places among the references of their type */
+} out_set_t;
 
-static void group_outputs(const csfh_cs_batch_spec_t *spec, out_groups_t *g)
+static int type_index(int type)
 {
-    memset(g->n, 0, sizeof(g->n));
+    return type == CSFH_BATCH_INTEGER ? 1 : type == CSFH_BATCH_BOOLEAN ? 2 : 0;
+}
+
+static void set_add(out_set_t *s, fmi2ValueReference vr, int type, size_t j)
+{
+    size_t slot = 0;
+    while (slot < s->n_vr[type] && s->vr[type][slot] != vr) {
+        slot++;
+    }
+    if (slot == s->n_vr[type]) {
+        s->vr[type][s->n_vr[type]++] = vr;
+    }
+    s->out[s->n] = j;
+    s->type[s->n] = type;
+    s->slot[s->n++] = slot;
+}
+
+/* The outputs as a run reads them: at every communication point those whose reduction needs
+ * every point (and the triggers they wait for), once at the stop time those that are only
+ * final values; with a record, all of them at every point. Outputs do not feed back into the
+ * integration, so a value read only at the end is the one a read at every point ends with. */
+typedef struct {
+    out_set_t every, last;
+} out_plan_t;
+
+static void plan_outputs(const csfh_cs_batch_spec_t *spec, int record, out_plan_t *p)
+{
+    memset(p, 0, sizeof(*p));
+    int every[MAX_OUT] = {0};
     for (size_t j = 0; j < spec->n_out; j++) {
-        const int t = spec->out_type[j] == CSFH_BATCH_INTEGER   ? 1
-                      : spec->out_type[j] == CSFH_BATCH_BOOLEAN ? 2
-                                                                : 0;
-        g->vr[t][g->n[t]] = spec->out_vr[j];
-        g->index[t][g->n[t]++] = j;
+        if (record || spec->out_reduce[j] != CSFH_BATCH_FINAL) {
+            every[j] = 1;
+        }
+        if (spec->out_reduce[j] == CSFH_BATCH_FIRST_WHEN) {
+            every[spec->out_arg[j]] = 1;
+        }
+    }
+    for (size_t j = 0; j < spec->n_out; j++) {
+        set_add(every[j] ? &p->every : &p->last, spec->out_vr[j], type_index(spec->out_type[j]),
+                j);
     }
 }
 
-/* Read every output (converted to double). */
-static fmi2Status read_outputs(const fmi2_api_t *api, fmi2Component c, const out_groups_t *g,
-                               double *v, run_log_t *log)
+/* Read the outputs of a set into v (converted to double). */
+static fmi2Status read_set(const fmi2_api_t *api, fmi2Component c, const out_set_t *set,
+                           double *v, run_log_t *log)
 {
     double reals[MAX_OUT];
     fmi2Integer ints[MAX_OUT];
     fmi2Boolean bools[MAX_OUT];
     fmi2Status s[3] = {fmi2OK, fmi2OK, fmi2OK};
-    if (g->n[0] > 0) {
-        s[0] = api->GetReal(c, g->vr[0], g->n[0], reals);
+    if (set->n_vr[0] > 0) {
+        s[0] = api->GetReal(c, set->vr[0], set->n_vr[0], reals);
     }
-    if (g->n[1] > 0 && s[0] <= fmi2Warning) {
-        s[1] = api->GetInteger(c, g->vr[1], g->n[1], ints);
+    if (set->n_vr[1] > 0 && s[0] <= fmi2Warning) {
+        s[1] = api->GetInteger(c, set->vr[1], set->n_vr[1], ints);
     }
-    if (g->n[2] > 0 && s[0] <= fmi2Warning && s[1] <= fmi2Warning) {
-        s[2] = api->GetBoolean(c, g->vr[2], g->n[2], bools);
+    if (set->n_vr[2] > 0 && s[0] <= fmi2Warning && s[1] <= fmi2Warning) {
+        s[2] = api->GetBoolean(c, set->vr[2], set->n_vr[2], bools);
     }
     static const char *const calls[3] = {"fmi2GetReal", "fmi2GetInteger", "fmi2GetBoolean"};
     for (int t = 0; t < 3; t++) {
@@ -177,14 +187,11 @@ static fmi2Status read_outputs(const fmi2_api_t *api, fmi2Component c, const out
         }
         log->have_warning |= s[t] == fmi2Warning;
     }
-    for (size_t k = 0; k < g->n[0]; k++) {
-        v[g->index[0][k]] = reals[k];
-    }
-    for (size_t k = 0; k < g->n[1]; k++) {
-        v[g->index[1][k]] = (double)ints[k];
-    }
-    for (size_t k = 0; k < g->n[2]; k++) {
-        v[g->index[2][k]] = bools[k] ? 1.0 : 0.0;
+    for (size_t i = 0; i < set->n; i++) {
+        const size_t k = set->slot[i];
+        v[set->out[i]] = set->type[i] == 0   ? reals[k]
+                         : set->type[i] == 1 ? (double)ints[k]
+                                             : (bools[k] ? 1.0 : 0.0);
     }
     return fmi2OK;
 }
@@ -235,20 +242,37 @@ static fmi2Status initialize(const fmi2_api_t *api, fmi2Component c,
 
 /* What a run keeps of its outputs. */
 typedef struct {
-    const out_groups_t *groups;
+    const out_plan_t *plan;
+    long long n_steps; /* the communication steps: the last point is k = n_steps */
     double *result, *record;
     double v[MAX_OUT], max_for_time[MAX_OUT];
 } run_outputs_t;
 
-/* The outputs at the communication point k (0: the start) at time t: read, reduced, recorded. */
+/* The outputs at the communication point k (0: the start) at time t: read, reduced, recorded;
+ * at the last point also those read only there (their final values). */
 static fmi2Status outputs_at(const fmi2_api_t *api, fmi2Component c,
                              const csfh_cs_batch_spec_t *spec, run_outputs_t *o, long long k,
                              double t, run_log_t *log)
 {
-    if (read_outputs(api, c, o->groups, o->v, log) > fmi2Warning) {
+    const out_set_t *every = &o->plan->every;
+    if (read_set(api, c, every, o->v, log) > fmi2Warning) {
         return fmi2Error;
     }
-    reduce(spec, o->v, t, k == 0, o->result, o->max_for_time);
+    for (size_t i = 0; i < every->n; i++) {
+        const size_t j = every->out[i];
+        const int how = spec->out_reduce[j];
+        const double trigger = how == CSFH_BATCH_FIRST_WHEN ? o->v[spec->out_arg[j]] : 0.0;
+        reduce_one(how, o->v[j], t, k == 0, trigger, &o->result[j], &o->max_for_time[j]);
+    }
+    if (k == o->n_steps && o->plan->last.n > 0) {
+        const out_set_t *last = &o->plan->last;
+        if (read_set(api, c, last, o->v, log) > fmi2Warning) {
+            return fmi2Error;
+        }
+        for (size_t i = 0; i < last->n; i++) {
+            o->result[last->out[i]] = o->v[last->out[i]];
+        }
+    }
     if (o->record != NULL) {
         memcpy(o->record + (size_t)k * spec->n_out, o->v, spec->n_out * sizeof(double));
     }
@@ -257,10 +281,10 @@ static fmi2Status outputs_at(const fmi2_api_t *api, fmi2Component c,
 
 /* The communication steps of a run, the outputs read after each: fmi2OK or the failure. */
 static fmi2Status steps(const fmi2_api_t *api, fmi2Component c, const csfh_cs_batch_spec_t *spec,
-                        run_outputs_t *o, long long n_steps, run_log_t *log)
+                        run_outputs_t *o, run_log_t *log)
 {
     double t = 0.0;
-    for (long long k = 0; k < n_steps; k++) {
+    for (long long k = 0; k < o->n_steps; k++) {
         /* the times of simulate_cs: min((k + 1) h, t_end), steps t_next - t */
         const double t_grid = (double)(k + 1) * spec->step;
         const double t_next = t_grid <= spec->stop_time ? t_grid : spec->stop_time;
@@ -278,39 +302,71 @@ static fmi2Status steps(const fmi2_api_t *api, fmi2Component c, const csfh_cs_ba
     return fmi2OK;
 }
 
-/* One run; returns its status. */
-static int run_one(const fmi2_api_t *api, const csfh_cs_batch_spec_t *spec,
-                   const out_groups_t *groups, const double *values, long long n_steps,
-                   double *result, double *record, run_log_t *log)
+/* The FMU instance a batch's runs share: one instance, reset between runs (fmi2Reset puts it
+ * back as fmi2Instantiate leaves it: start values, no integration), made anew after a failed
+ * run. Its log goes to `log`, which each run points at its own message. */
+typedef struct {
+    const fmi2_api_t *api;
+    const csfh_cs_batch_spec_t *spec;
+    fmi2CallbackFunctions callbacks;
+    run_log_t log;
+    fmi2Component c; /* NULL: none yet */
+} batch_instance_t;
+
+/* The instance, ready for a run (NULL: it could not be made, the failure in the run's log). */
+static fmi2Component fresh_instance(batch_instance_t *b)
 {
-    const fmi2CallbackFunctions callbacks = {logger, allocate, free, NULL, log};
-    fmi2Component c = api->Instantiate(spec->instance_name, fmi2CoSimulation, spec->guid,
-                                       spec->resource_uri, &callbacks, fmi2False, fmi2False);
+    const fmi2_api_t *api = b->api;
+    if (b->c != NULL && (api->Reset == NULL || api->Reset(b->c) > fmi2Warning)) {
+        api->FreeInstance(b->c);
+        b->c = NULL;
+    }
+    if (b->c == NULL) {
+        b->c = api->Instantiate(b->spec->instance_name, fmi2CoSimulation, b->spec->guid,
+                                b->spec->resource_uri, &b->callbacks, fmi2False, fmi2False);
+    }
+    if (b->c == NULL) {
+        call_failed(&b->log, "fmi2Instantiate", fmi2Error);
+    }
+    return b->c;
+}
+
+/* The end of a run on the shared instance: its status; a failed run's instance is freed. */
+static int end_run(batch_instance_t *b, int failed)
+{
+    if (!failed) {
+        const fmi2Status s = b->api->Terminate(b->c);
+        if (s > fmi2Warning) {
+            call_failed(&b->log, "fmi2Terminate", s);
+            failed = 1;
+        }
+    }
+    if (failed) {
+        b->api->FreeInstance(b->c);
+        b->c = NULL;
+        return CSFH_BATCH_FAILED;
+    }
+    return b->log.have_warning ? CSFH_BATCH_WARNING : CSFH_BATCH_OK;
+}
+
+/* One run on the shared instance; returns its status. */
+static int run_one(batch_instance_t *b, const double *values, run_outputs_t *o)
+{
+    const fmi2_api_t *api = b->api;
+    const fmi2Component c = fresh_instance(b);
     if (c == NULL) {
-        call_failed(log, "fmi2Instantiate", fmi2Error);
         return CSFH_BATCH_FAILED;
     }
     const char *call = NULL;
-    fmi2Status s = initialize(api, c, spec, values, &call);
+    const fmi2Status s = initialize(api, c, b->spec, values, &call);
     if (s > fmi2Warning) {
-        call_failed(log, call, s);
-        api->FreeInstance(c);
-        return CSFH_BATCH_FAILED;
+        call_failed(&b->log, call, s);
+        return end_run(b, 1);
     }
-    log->have_warning |= s == fmi2Warning;
-    run_outputs_t o = {groups, result, record, {0}, {0}};
-    if (outputs_at(api, c, spec, &o, 0, 0.0, log) > fmi2Warning ||
-        steps(api, c, spec, &o, n_steps, log) > fmi2Warning) {
-        api->FreeInstance(c);
-        return CSFH_BATCH_FAILED;
-    }
-    s = api->Terminate(c);
-    api->FreeInstance(c);
-    if (s > fmi2Warning) {
-        call_failed(log, "fmi2Terminate", s);
-        return CSFH_BATCH_FAILED;
-    }
-    return log->have_warning ? CSFH_BATCH_WARNING : CSFH_BATCH_OK;
+    b->log.have_warning |= s == fmi2Warning;
+    const int failed = outputs_at(api, c, b->spec, o, 0, 0.0, &b->log) > fmi2Warning ||
+                       steps(api, c, b->spec, o, &b->log) > fmi2Warning;
+    return end_run(b, failed);
 }
 
 /* The spec's pointers and its start values: 1 if they are unusable. */
@@ -390,24 +446,30 @@ long long csfh_cs_batch_run(const csfh_cs_batch_spec_t *spec, size_t n_runs, con
         return -1;
     }
     const long long n_points = csfh_cs_batch_points(spec->stop_time, spec->step);
-    out_groups_t groups;
-    group_outputs(spec, &groups);
+    out_plan_t plan;
+    plan_outputs(spec, records != NULL, &plan);
+    batch_instance_t b = {&api, spec, {logger, allocate, free, NULL, &b.log}, {NULL, 0, 0, 0},
+                          NULL};
     long long failed = 0;
+    char dummy[1]; /* the log of a run without a message buffer */
     for (size_t r = 0; r < n_runs; r++) {
-        char dummy[1];
-        run_log_t log = {have_messages ? messages + r * message_size : dummy,
-                         have_messages ? message_size : sizeof(dummy), 0, 0};
-        log.message[0] = '\0';
-        double *result = results + r * spec->n_out;
-        double *record = records != NULL ? records + r * (size_t)n_points * spec->n_out : NULL;
-        const double *v = values != NULL ? values + r * spec->n_set : NULL;
-        status[r] = run_one(&api, spec, &groups, v, n_points - 1, result, record, &log);
+        const run_log_t log = {have_messages ? messages + r * message_size : dummy,
+                               have_messages ? message_size : sizeof(dummy), 0, 0};
+        b.log = log;
+        b.log.message[0] = '\0';
+        run_outputs_t o = {&plan, n_points - 1, results + r * spec->n_out,
+                           records != NULL ? records + r * (size_t)n_points * spec->n_out : NULL,
+                           {0}, {0}};
+        status[r] = run_one(&b, values != NULL ? values + r * spec->n_set : NULL, &o);
         if (status[r] == CSFH_BATCH_FAILED) {
             for (size_t j = 0; j < spec->n_out; j++) {
-                result[j] = NAN;
+                o.result[j] = NAN;
             }
             failed++;
         }
+    }
+    if (b.c != NULL) {
+        api.FreeInstance(b.c);
     }
     fmu_library_close(library);
     return failed;

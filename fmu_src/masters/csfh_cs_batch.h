@@ -4,6 +4,11 @@
  * by one in initialization mode, read the outputs at the start and after every fmi2DoStep of a
  * fixed communication grid. Only scalars are kept per run (reductions of the outputs over the
  * communication points: final value, maximum, ...), and optionally the outputs on the grid.
+ * The runs share one instance, put back by fmi2Reset into the state fmi2Instantiate leaves it in
+ * (made anew after a failed run). Each communication point reads the outputs its reductions
+ * need there (each value reference once); an output reduced to its final value only is read
+ * at the stop time (outputs do not feed back into the integration, so that is the value a read
+ * at every point ends with); with a record, every output at every point.
  *
  * The master loads the very binary the single run loads (dlopen of the unzipped FMU's
  * binaries/<platform>/<id>.so), so a batched run is the single run by construction: the same

@@ -455,22 +455,18 @@ void csfh_model_stresses(const csfh_model_t *m, const double q[3], double F_N,
                                                    &s->contact_half_width);
 }
 
-/* The contact outputs at x: forces, gap, indentation and its rate, sliding speed. */
+/* The contact's kinematic outputs at x: gap, indentation rate, sliding speed. */
 static void contact_outputs(csfh_model_t *m, const csfh_contact_eval_t *c, const double *x,
                             csfh_outputs_t *o)
 {
-    o->F_N = c->F_N;
-    o->F_T = c->F_T;
     if (c->touching) {
         o->gap = c->kin.gap;
-        o->indentation = c->rho;
         o->indentation_rate = c->rho_dot;
         o->v_T = c->kin.DT[0] * x[3] + c->kin.DT[1] * x[4] + c->kin.DT[2] * x[5];
     } else {
         csfh_contact_kin_t kin;
         csfh_contact_kinematics(m->d.delta, m->p.R1, m->p.s1bar, x, &kin);
         o->gap = kin.gap;
-        o->indentation = 0.0;
         o->indentation_rate = -(kin.DN[0] * x[3] + kin.DN[1] * x[4] + kin.DN[2] * x[5]);
         o->v_T = kin.DT[0] * x[3] + kin.DT[1] * x[4] + kin.DT[2] * x[5];
     }
@@ -495,12 +491,31 @@ static void peak_outputs(const csfh_model_t *m, const double *peaks, csfh_output
     o->pressure_margin = 1.0 - o->pressure_max_peak / m->p.pressure_allowable;
 }
 
+/* The loads at the current state: the contact force (c: its evaluation), the indentation, the
+ * stresses (docs/model.md §14.2-14.3: at output time only), the peaks and margins. */
+static void load_outputs(csfh_model_t *m, contact_rule_t contact, const double *peaks,
+                         csfh_outputs_t *o, csfh_contact_eval_t *c)
+{
+    const double *x = m->x;
+    contact(m, x, x + 3, c);
+    o->F_N = c->F_N;
+    o->F_T = c->F_T;
+    o->indentation = c->touching ? c->rho : 0.0;
+    csfh_stresses_t st;
+    csfh_model_stresses(m, x, o->F_N, &st);
+    o->stress_max = st.flexure_stress;
+    o->stress_location = st.flexure_location;
+    o->pressure_max = st.contact_pressure;
+    o->half_width = st.contact_half_width;
+    peak_outputs(m, peaks, o);
+}
+
 static int outputs(csfh_model_t *m, contact_rule_t contact, const double *peaks,
                    csfh_outputs_t *o)
 {
     const double *x = m->x;
     csfh_contact_eval_t c;
-    contact(m, x, x + 3, &c);
+    load_outputs(m, contact, peaks, o, &c);
     contact_outputs(m, &c, x, o);
     o->E_kinetic = 0.5 * m->p.m1 * (x[3] * x[3] + x[4] * x[4]) + 0.5 * m->p.I1 * x[5] * x[5];
     o->E_gravity = m->p.m1 * m->p.g * x[1];
@@ -512,15 +527,14 @@ static int outputs(csfh_model_t *m, contact_rule_t contact, const double *peaks,
     }
     o->E_contact = c.touching ? csfh_normal_elastic_energy(&m->d.normal, c.rho) : 0.0;
     o->E_total = o->E_kinetic + o->E_gravity + o->E_flexure + o->E_contact;
-    /* stresses (docs/model.md §14.2-14.3): at output time only */
-    csfh_stresses_t st;
-    csfh_model_stresses(m, x, o->F_N, &st);
-    o->stress_max = st.flexure_stress;
-    o->stress_location = st.flexure_location;
-    o->pressure_max = st.contact_pressure;
-    o->half_width = st.contact_half_width;
-    peak_outputs(m, peaks, o);
     csfh_model_frame_acceleration(m, m->time, o->a_frame);
+    return c.status == CSFH_LAW_ESDU_CLAMPED ? CSFH_WARN_ESDU_CLAMPED : CSFH_OK;
+}
+
+int csfh_model_load_outputs(csfh_model_t *m, const double *peaks, csfh_outputs_t *out)
+{
+    csfh_contact_eval_t c;
+    load_outputs(m, csfh_model_contact, peaks, out, &c);
     return c.status == CSFH_LAW_ESDU_CLAMPED ? CSFH_WARN_ESDU_CLAMPED : CSFH_OK;
 }
 

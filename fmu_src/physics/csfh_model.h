@@ -217,6 +217,10 @@ void csfh_model_stresses(const csfh_model_t *m, const double q[3], double F_N,
  * outputs take the largest of the current values and `peaks` (CSFH_N_PEAKS values so far in the
  * communication step; NULL: none). CSFH_OK or CSFH_WARN_ESDU_CLAMPED. */
 int csfh_model_outputs(csfh_model_t *m, const double *peaks, csfh_outputs_t *out);
+/* Of these only the loads (a master that reduces the peaks reads these alone): the contact
+ * forces F_N, F_T and the indentation, the stresses, the peaks and margins, each the value
+ * csfh_model_outputs gives it; the other outputs are left as they are. */
+int csfh_model_load_outputs(csfh_model_t *m, const double *peaks, csfh_outputs_t *out);
 /* ... with the contact force by the gap (the RK4 scheme: csfh_model_contact_by_gap), no peaks. */
 int csfh_model_outputs_by_gap(csfh_model_t *m, csfh_outputs_t *out);
 

@@ -414,6 +414,50 @@ def test_peaks_do_not_depend_on_when_they_are_read(
         assert evaluations_never < 0.9 * evaluations_every, (evaluations_never, evaluations_every)
 
 
+LOADS = (  # the outputs the FMU computes alone (csfh_model_load_outputs)
+    *("contact.F_N", "contact.F_T", "contact.indentation", *PEAKS),
+    *("flexure.stress_max", "flexure.stress_location", "flexure.stress_max_peak"),
+    *("flexure.stress_margin", "contact.pressure_max", "contact.half_width"),
+    *("contact.pressure_max_peak", "contact.pressure_margin"),
+)
+OTHERS = ("contact.gap", "contact.v_T", "contact.indentation_rate", "energy.total")
+OTHERS += ("energy.kinetic", "energy.flexure", "energy.contact", "a_frame[1]", "a_frame[2]")
+
+
+@pytest.mark.parametrize("method", ["RK45", "Adams"])
+def test_the_loads_read_alone_are_those_of_all_outputs(
+    make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int], method: str
+) -> None:
+    """A master that reads only the loads (forces, indentation, stresses, peaks, margins) gets
+    them, bit for bit, as one that reads every output: the FMU computes the loads alone then
+    (no flexure force for the energy: fewer flexure evaluations), and an output read after
+    them in the same communication step is computed then, not left as it was. Reading the
+    others first, or all in one call, gives the same values too."""
+    scene = load_scene("csfh")
+    points = grid(1e-3, 0.2)
+    loads, others = [vr[n] for n in LOADS], [vr[n] for n in OTHERS]
+
+    def master(reads: list[list[int]]) -> tuple[list[list[float]], int]:
+        fmu, _ = cs_instance(make_fmu, model_description, scene, tolerance=1e-6, method=method)
+        t, seen = 0.0, []
+        for p in points:
+            fmu.doStep(t, p - t)
+            t = float(p)
+            seen.append([x for refs in reads for x in fmu.getReal(refs)])
+        return seen, fmu.getInteger([vr["diagnostics.flexure_evaluations"]])[0]
+
+    together, n_together = master([loads + others])
+    apart, n_apart = master([loads, others])
+    others_first, _ = master([others, loads])
+    alone, n_alone = master([loads])
+    assert sum(v[3] > 0 for v in together) >= 2  # steps that hold contacts (F_N_peak > 0)
+    assert apart == together
+    assert [v[len(others) :] + v[: len(others)] for v in others_first] == together
+    assert [v[: len(loads)] for v in together] == alone
+    # one flexure force per point for the energy, none for the loads alone
+    assert n_alone == n_together - len(points) and n_apart == n_together
+
+
 @pytest.mark.parametrize("method", list(METHODS))
 def test_peaks_match_a_fine_sampling(
     make_fmu: MakeFmu, model_description: ModelDescription, vr: dict[str, int], method: str

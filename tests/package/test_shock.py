@@ -269,6 +269,89 @@ def test_batch_is_bitwise_the_single_runs() -> None:
         assert len({batch.summary(i)["max_flexure_stress"] for i in range(3)}) == 3
 
 
+def test_batch_reductions_are_those_of_the_recorded_points() -> None:
+    """Without a record the master reads the final values only at the stop time and each value
+    reference once: its reductions are bitwise those of the outputs it records at every point,
+    on one instance reset between runs (a refused run in the middle makes it anew)."""
+    scene = load_scene("csfh")
+    sets = [
+        {"contact.R1": 0.18, "shock.peak": 60 * G_STANDARD, "shock.start": 0.02},
+        {"contact.R1": 0.25},  # R1 > R2: refused
+        {"contact.R1": 0.1801, "flexure.track_stress_peak": True},
+    ]
+    sets = [
+        {"shock.peak": 0.0, "shock.start": 0.0, "flexure.track_stress_peak": False, **s}
+        for s in sets
+    ]
+    finals = tuple(
+        (name, "final") for name in ("contact.F_N_peak", "contact.count", "contact.active")
+    )
+    outputs = (
+        *finals,
+        ("flexure.stress_max_peak", "max"),
+        ("contact.F_N_peak", "absmax"),
+        ("contact.F_N", "min"),
+        ("contact.F_N_peak", "time_of_max"),
+    )
+    kw: dict[str, Any] = {"stop_time": 0.2, "communication_step": 1e-3, "check": False}
+    plain = cs_batch(scene, "LN_cylinders", sets, outputs=outputs, **kw)
+    recorded = cs_batch(scene, "LN_cylinders", sets, outputs=outputs, record=True, **kw)
+    assert list(plain.status) == list(recorded.status) == [0, -1, 0]
+    n = len(outputs)  # a record adds the table's outputs after these
+    assert np.array_equal(plain.results, recorded.results[:, :n], equal_nan=True)
+    for i in (0, 2):
+        for j, (name, _) in enumerate(finals):
+            assert plain.results[i, j] == recorded.column(i, name)[-1]
+        assert (
+            plain.value(i, "contact.F_N_peak", "absmax")
+            == recorded.column(i, "contact.F_N_peak").max()
+        )
+    assert plain.value(0, "contact.count") > 0
+    alone = cs_batch(scene, "LN_cylinders", sets[2:], outputs=outputs, **kw)
+    assert np.array_equal(alone.results[0], plain.results[2])
+
+
+def _start_values_one_by_one(scene: Any, law: str | None, extra: dict[str, Any] | None) -> list:
+    """What a run sets, worked out for it alone: the scene's parameters with the law, the
+    overrides, the start state, the inputs, each value as its FMI type is set."""
+    from csfh.runners.fmu import STATE_NAMES
+
+    values = dict(scene.parameter_values(law))
+    values.update({k: model_info.coerce(k, v) for k, v in (extra or {}).items()})
+    values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
+    values.update(scene.inputs)
+    kinds = {"Real": float, "Boolean": bool}
+    out = []
+    for name, value in values.items():
+        kind = model_info.variables()[name].type
+        kind = kind if kind in kinds else "Integer"
+        out.append((name, kind, kinds.get(kind, int)(value)))
+    return out
+
+
+def test_start_values_of_runs_are_each_runs_start_values() -> None:
+    """The batch's start values (the scene's part worked out once) are those of each run alone:
+    the same names, FMI types, values and order, whatever the overrides (new names, a Boolean,
+    an Enumeration by name, a start state, which the scene's start state replaces)."""
+    from csfh.runners.fmu import start_values_of_runs
+
+    scene = load_scene("csfh")
+    extras: list[dict[str, Any] | None] = [
+        None,
+        {},
+        {"contact.R1": 0.1801, "flexure.track_stress_peak": True},
+        {"solver.method": "RK45", "shock.peak": 5.0, "contact.law_number": 3},
+        {"body1.x": 1e-3, "contact.cr": 0.5},
+    ]
+    for law in ("LN_cylinders", None):
+        runs = start_values_of_runs(scene, law, extras)
+        for run, extra in zip(runs, extras, strict=True):
+            alone = _start_values_one_by_one(scene, law, extra)
+            assert run == alone == start_values(scene, law, extra)
+            assert [type(v) for _, _, v in run] == [type(v) for _, _, v in alone]
+        assert runs[2] != runs[0] != runs[3]
+
+
 def test_batch_reports_a_refused_run_and_runs_the_others() -> None:
     scene = load_scene("csfh")
     sets = [  # run 1: R1 > R2, refused

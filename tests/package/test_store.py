@@ -18,7 +18,7 @@ import pytest
 from csfh_command import run_csfh
 
 from csfh.batch.executors import run_tasks
-from csfh.batch.store import ResultStore
+from csfh.batch.store import ResultStore, as_read_back
 from csfh.batch.tasks import Task
 from csfh.cli.main import main
 from csfh.model.scene import load_scene
@@ -361,3 +361,33 @@ def test_refresh_reads_what_another_command_appended(
     assert mine.refresh() == {key_of(lines[5]), key_of(lines[6])}
     assert mine.refresh() == set() and len(mine) == 7 and len(theirs) == 5
     check_kept_all_but(mine, tasks, {key_of(line) for line in lines[7:]})
+
+
+def _types(value: object) -> object:
+    """The types of a JSON value, nested as the value."""
+    if isinstance(value, dict):
+        return {k: _types(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_types(v) for v in value]
+    return type(value)
+
+
+def test_a_record_is_stored_as_it_reads_back() -> None:
+    """as_read_back is json.loads(json.dumps(record)): the same text, values, types and key
+    order, a copy of the record, for plain records (copied) and others (tuples, numpy floats,
+    numbers as keys: through the text)."""
+    records: list[dict[str, object]] = [
+        {"key": "k", "parameters": {"a": 0.1, "b": True, "c": 3, "d": "x"}, "meta": {}},
+        {"summary": {"first": None, "peak": float("nan"), "big": 1e308, "n": -0.0}},
+        {"nested": [[1, 2.5], {"z": [None, False]}], "inf": float("inf")},
+        {"numpy": np.float64(0.1), "list": [np.float64(1.0) / 3]},
+        {"meta": {"pair": (1, 2), "k": {1: "one"}}},
+    ]
+    for rec in records:
+        expected = json.loads(json.dumps(rec))
+        got = as_read_back(rec)
+        assert json.dumps(got, sort_keys=True) == json.dumps(expected, sort_keys=True)
+        assert list(got) == list(expected) and _types(got) == _types(expected)
+        assert got is not rec and all(got[k] is not rec[k] for k in rec if isinstance(rec[k], dict))
+    with pytest.raises(TypeError):
+        as_read_back({"x": np.float32(0.5)})  # not JSON, as json.dumps says

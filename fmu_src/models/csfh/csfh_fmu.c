@@ -93,3 +93,8 @@ int csfh_fmu_outputs(csfh_fmu_t *f)
 {
     return csfh_model_outputs(&f->m, f->peaks.active ? f->peaks.v : NULL, &f->out);
 }
+
+int csfh_fmu_load_outputs(csfh_fmu_t *f)
+{
+    return csfh_model_load_outputs(&f->m, f->peaks.active ? f->peaks.v : NULL, &f->out);
+}

@@ -56,6 +56,8 @@ int csfh_fmu_prepare(csfh_fmu_t *f, char *msg, size_t msg_size);
 /* f->out at the current state, the peak outputs with the running peaks of the communication
  * step where there are any: CSFH_OK or CSFH_WARN_ESDU_CLAMPED. */
 int csfh_fmu_outputs(csfh_fmu_t *f);
+/* Of f->out only the loads (csfh_model_load_outputs), as csfh_fmu_outputs gives them. */
+int csfh_fmu_load_outputs(csfh_fmu_t *f);
 
 CSFH_INTERNAL_END
 

@@ -80,18 +80,12 @@ static int event_update(void *f, char *msg, size_t msg_size)
     return change;
 }
 
-static int outputs(void *fv, char *msg, size_t msg_size)
+/* The status of outputs computed with model status `status`: the first of `values` that is not
+ * finite, else the ESDU clamp's warning (messages in msg). */
+static int outputs_status(const csfh_fmu_t *f, int status, const double *values, size_t n,
+                          char *msg, size_t msg_size)
 {
-    csfh_fmu_t *f = (csfh_fmu_t *)fv;
-    const int status = csfh_fmu_outputs(f);
-    const csfh_outputs_t *o = &f->out;
-    const double values[] = {o->F_N, o->F_T, o->indentation, o->gap, o->v_T,
-                             o->indentation_rate, o->E_total, o->F_N_peak, o->F_T_peak,
-                             o->indentation_peak, o->stress_max, o->stress_location,
-                             o->stress_max_peak, o->stress_margin, o->pressure_max,
-                             o->half_width, o->pressure_max_peak, o->pressure_margin,
-                             o->a_frame[0], o->a_frame[1]};
-    for (size_t i = 0; i < sizeof(values) / sizeof(values[0]); i++) {
+    for (size_t i = 0; i < n; i++) {
         if (!isfinite(values[i])) {
             snprintf(msg, msg_size, "non-finite output at t = %.17g", f->m.time);
             return FMU_MODEL_NONFINITE;
@@ -105,6 +99,50 @@ static int outputs(void *fv, char *msg, size_t msg_size)
         return FMU_MODEL_WARNING;
     }
     return FMU_MODEL_OK;
+}
+
+/* The loads of csfh_fmu_load_outputs, as fields of csfh_outputs_t: what comm_step_begins takes
+ * from the outputs (F_N, F_T, indentation, stress_max) is among them. */
+#define LOAD_FIELDS(o)                                                                          \
+    (o)->F_N, (o)->F_T, (o)->indentation, (o)->F_N_peak, (o)->F_T_peak, (o)->indentation_peak,  \
+        (o)->stress_max, (o)->stress_location, (o)->stress_max_peak, (o)->stress_margin,        \
+        (o)->pressure_max, (o)->half_width, (o)->pressure_max_peak, (o)->pressure_margin
+
+static int outputs(void *fv, char *msg, size_t msg_size)
+{
+    csfh_fmu_t *f = (csfh_fmu_t *)fv;
+    const int status = csfh_fmu_outputs(f);
+    const csfh_outputs_t *o = &f->out;
+    const double values[] = {LOAD_FIELDS(o), o->gap, o->v_T, o->indentation_rate, o->E_total,
+                             o->a_frame[0], o->a_frame[1]};
+    return outputs_status(f, status, values, sizeof(values) / sizeof(values[0]), msg, msg_size);
+}
+
+static int load_outputs(void *fv, char *msg, size_t msg_size)
+{
+    csfh_fmu_t *f = (csfh_fmu_t *)fv;
+    const int status = csfh_fmu_load_outputs(f);
+    const csfh_outputs_t *o = &f->out;
+    const double values[] = {LOAD_FIELDS(o)};
+    return outputs_status(f, status, values, sizeof(values) / sizeof(values[0]), msg, msg_size);
+}
+
+static int is_load_output(size_t offset)
+{
+    static const size_t loads[] = {
+        offsetof(csfh_fmu_t, out.F_N),          offsetof(csfh_fmu_t, out.F_T),
+        offsetof(csfh_fmu_t, out.indentation),  offsetof(csfh_fmu_t, out.F_N_peak),
+        offsetof(csfh_fmu_t, out.F_T_peak),     offsetof(csfh_fmu_t, out.indentation_peak),
+        offsetof(csfh_fmu_t, out.stress_max),   offsetof(csfh_fmu_t, out.stress_location),
+        offsetof(csfh_fmu_t, out.stress_max_peak), offsetof(csfh_fmu_t, out.stress_margin),
+        offsetof(csfh_fmu_t, out.pressure_max), offsetof(csfh_fmu_t, out.half_width),
+        offsetof(csfh_fmu_t, out.pressure_max_peak), offsetof(csfh_fmu_t, out.pressure_margin)};
+    for (size_t i = 0; i < sizeof(loads) / sizeof(loads[0]); i++) {
+        if (offset == loads[i]) {
+            return 1;
+        }
+    }
+    return 0;
 }
 
 static int cs_method(const void *f)
@@ -296,6 +334,8 @@ const fmu_model_t fmu_model = {
     .event_indicators = event_indicators,
     .event_update = event_update,
     .outputs = outputs,
+    .subset_outputs = load_outputs,
+    .in_subset = is_load_output,
     .add_integrator_steps = add_integrator_steps,
     .add_jacobians = add_jacobians,
     .cs_jacobian = cs_jacobian,

@@ -95,6 +95,40 @@ def record_sha256(rec: dict[str, Any]) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
+_PLAIN = (str, int, float, bool, type(None))
+
+
+class _NotPlain(Exception):
+    """A value that JSON does not read back as itself."""
+
+
+def _plain_copy(value: Any) -> Any:
+    """A copy of value made of dicts with text keys, lists and plain scalars (raises _NotPlain
+    for anything else)."""
+    kind = type(value)
+    if kind is dict:
+        if not all(type(k) is str for k in value):
+            raise _NotPlain
+        return {k: _plain_copy(v) for k, v in value.items()}
+    if kind is list:
+        return [_plain_copy(v) for v in value]
+    if kind in _PLAIN:
+        return value
+    if isinstance(value, float):  # e.g. numpy's float64: JSON writes it as the float it is
+        return float(value)
+    raise _NotPlain
+
+
+def as_read_back(rec: dict[str, Any]) -> dict[str, Any]:
+    """A record as it reads back from the index, json.loads(json.dumps(rec)) (tuples become
+    lists, number types plain numbers, keys text): for a record that is plain JSON already
+    (the common case) a copy, without the text."""
+    try:
+        return cast(dict[str, Any], _plain_copy(rec))
+    except _NotPlain:
+        return cast(dict[str, Any], json.loads(json.dumps(rec)))
+
+
 def _is_number(value: object) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
@@ -343,7 +377,7 @@ class ResultStore:
                 "signals_sha256": digest,
                 "wall_time": wall_time,
             }
-            rec = json.loads(json.dumps(rec))  # as it reads back (tuples become lists)
+            rec = as_read_back(rec)
             rec["record_sha256"] = record_sha256(rec)
             lines.append(json.dumps(rec, sort_keys=True) + "\n")
             records.append(rec)

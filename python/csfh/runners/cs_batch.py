@@ -21,7 +21,7 @@ import time
 from collections.abc import Sequence
 from ctypes import POINTER, Structure, c_char_p, c_double, c_int, c_longlong, c_size_t, c_uint
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, cached_property
 from typing import Any
 
 import numpy as np
@@ -42,6 +42,7 @@ from .fmu import (
     cs_trajectory,
     first_record,
     start_values,
+    start_values_of_runs,
     unzipped_fmu,
 )
 
@@ -167,11 +168,19 @@ class CsBatchResult:
     def __len__(self) -> int:
         return len(self.status)
 
-    def _index(self, name: str, reduction: str = "final") -> int:
+    @cached_property
+    def _positions(self) -> dict[tuple[str, str], int]:
+        """(name, reduction) -> its column of `results` (the first, if an output repeats)."""
+        positions: dict[tuple[str, str], int] = {}
         for j, out in enumerate(self.outputs):
-            if out[0] == name and out[1] == reduction:
-                return j
-        raise KeyError(f"the batch did not reduce {name} by {reduction}")
+            positions.setdefault((out[0], out[1]), j)
+        return positions
+
+    def _index(self, name: str, reduction: str = "final") -> int:
+        j = self._positions.get((name, reduction))
+        if j is None:
+            raise KeyError(f"the batch did not reduce {name} by {reduction}")
+        return j
 
     def value(self, i: int, name: str, reduction: str = "final") -> float:
         return float(self.results[i, self._index(name, reduction)])
@@ -290,7 +299,7 @@ def _start_values(
 ) -> tuple[list[int], list[int], np.ndarray]:
     """The value references and types every run sets, and each run's values (one row each):
     every run must set the same variables in the same order (one spec per batch)."""
-    rows = [start_values(scene, law, p) for p in parameter_sets]
+    rows = start_values_of_runs(scene, law, parameter_sets)
     first = rows[0] if rows else start_values(scene, law)
     order = [(name, kind) for name, kind, _ in first]
     for k, row in enumerate(rows):

@@ -11,6 +11,7 @@ import math
 import os
 import shutil
 import tempfile
+from collections.abc import Sequence
 from functools import cache
 from typing import Any
 
@@ -107,19 +108,35 @@ def start_values(
     as set: Real | Integer | Boolean, value). The parameters of the scene and law, the overrides,
     the start state, the inputs. Every run of the FMU (model exchange, co-simulation, the batch
     master) takes its values from here."""
-    values: dict[str, Any] = dict(scene.parameter_values(law))
-    if extra:
-        values.update({k: model_info.coerce(k, v) for k, v in extra.items()})
-    values.update(dict(zip(STATE_NAMES, scene.x0, strict=True)))
-    values.update(scene.inputs)
+    return start_values_of_runs(scene, law, [extra])[0]
+
+
+def start_values_of_runs(
+    scene: Scene, law: str | None, extras: Sequence[dict[str, Any] | None]
+) -> list[list[tuple[str, str, float | int | bool]]]:
+    """`start_values(scene, law, extra)` of each run's overrides `extra`, the scene's part
+    worked out once for all of them."""
+    base: dict[str, Any] = dict(scene.parameter_values(law))
+    after = {**dict(zip(STATE_NAMES, scene.x0, strict=True)), **scene.inputs}
     variables = model_info.variables()
-    kinds = {"Real": float, "Boolean": bool}
-    out: list[tuple[str, str, float | int | bool]] = []
-    for name, value in values.items():
-        kind = variables[name].type
-        kind = kind if kind in kinds else "Integer"
-        out.append((name, kind, kinds.get(kind, int)(value)))
-    return out
+    as_set = {name: _as_set(variables[name].type) for name in (*base, *after)}
+    runs = []
+    for extra in extras:
+        values = dict(base)
+        if extra:
+            values.update({k: model_info.coerce(k, v) for k, v in extra.items()})
+        values.update(after)
+        out: list[tuple[str, str, float | int | bool]] = []
+        for name, value in values.items():
+            kind, convert = as_set.get(name) or _as_set(variables[name].type)
+            out.append((name, kind, convert(value)))
+        runs.append(out)
+    return runs
+
+
+def _as_set(kind: str) -> tuple[str, Any]:
+    """The FMI type a variable of type `kind` is set as, and the Python type of its value."""
+    return {"Real": ("Real", float), "Boolean": ("Boolean", bool)}.get(kind, ("Integer", int))
 
 
 def check_law(law: str) -> None:
