@@ -23,15 +23,17 @@ import re
 import statistics
 import subprocess
 import tempfile
-from dataclasses import replace
 from pathlib import Path
 
-from c_master import _binary, default_master, master_command, run_c_master
+from c_master import (
+    add_build_comparison_arguments,
+    compared_builds,
+    master_command,
+    run_c_master,
+)
 
-from csfh import load_scene
 from csfh.model.scene import Scene
 
-LAWS = ("LN_spheres", "LN_cylinders", "LN_ESDU")
 CALLBACKS = ("roots", "rhs")
 FN = re.compile(r"^(c?fn)=\((\d+)\)(?: (.*))?$")
 
@@ -107,20 +109,12 @@ def walls(
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--baseline", type=Path, required=True, help="the other build's csfh.so")
-    ap.add_argument("--binary", type=Path, default=None, help="default: the FMU in use")
+    add_build_comparison_arguments(ap)
     ap.add_argument("--rtol", type=float, nargs="+", default=[1e-4, 1e-6])
-    ap.add_argument("--laws", nargs="+", default=list(LAWS), choices=LAWS)
     ap.add_argument("--rounds", type=int, default=11)
     ap.add_argument("--repeats", type=int, default=201)
-    ap.add_argument("--horizon", type=float, default=0.42, help="s (first three contacts)")
-    ap.add_argument("--master", type=Path, default=default_master())
     args = ap.parse_args()
-    binaries = {
-        "baseline": args.baseline,
-        "this": args.binary if args.binary is not None else Path(_binary()),
-    }
-    scene = replace(load_scene("central"), stop_time=args.horizon)
+    binaries, scene = compared_builds(args)
     print(
         f"scene {scene.name}, horizon {args.horizon} s, 10 ms grid, method auto; per run; "
         f"ratio = baseline / this; wall: medians of {args.rounds} rounds in turns\n"

@@ -32,15 +32,17 @@ import shutil
 import statistics
 import subprocess
 import tempfile
-from dataclasses import replace
 from pathlib import Path
 
-from c_master import _binary, default_master, master_command, run_c_master
+from c_master import (
+    add_build_comparison_arguments,
+    compared_builds,
+    master_command,
+    run_c_master,
+)
 
-from csfh import load_scene
 from csfh.model.scene import Scene
 
-LAWS = ("LN_spheres", "LN_cylinders", "LN_ESDU")
 # read at the end of a run (the counters restart with fmi2Reset): contacts, steps, RHS
 COUNTS = ("contact.count", "diagnostics.integrator_steps", "diagnostics.rhs_evaluations")
 
@@ -104,21 +106,13 @@ def perf_top(master: Path, binary: Path, scene: Scene, law: str, rtol: float, n:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--baseline", type=Path, required=True, help="the other build's csfh.so")
-    ap.add_argument("--binary", type=Path, default=None, help="default: the FMU in use")
+    add_build_comparison_arguments(ap)
     ap.add_argument("--rounds", type=int, default=21)
     ap.add_argument("--repeats", type=int, default=301, help="runs of the scene per master run")
     ap.add_argument("--rtol", type=float, nargs="+", default=[1e-6, 1e-9])
-    ap.add_argument("--laws", nargs="+", default=list(LAWS), choices=LAWS)
-    ap.add_argument("--horizon", type=float, default=0.42, help="s (first three contacts)")
     ap.add_argument("--perf", action="store_true", help="also the perf profiles' top entries")
-    ap.add_argument("--master", type=Path, default=default_master())
     args = ap.parse_args()
-    binaries = {
-        "baseline": args.baseline,
-        "this": args.binary if args.binary is not None else Path(_binary()),
-    }
-    scene = replace(load_scene("central"), stop_time=args.horizon)
+    binaries, scene = compared_builds(args)
     print(
         f"scene {scene.name}, horizon {args.horizon} s, 10 ms grid, method auto; medians of "
         f"{args.rounds} rounds in turns, each the median of {args.repeats} runs\n"

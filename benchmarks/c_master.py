@@ -5,16 +5,18 @@ FMU, with no Python per communication point. Shared by bench_cosim.py and bench_
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import subprocess
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
 from typing import Any
 
 import fmpy
 
+from csfh import load_scene
 from csfh.model import model_info
 from csfh.model.scene import Scene
 from csfh.runners.fmu import STATE_NAMES
@@ -120,3 +122,26 @@ def run_c_master(
         final=[float(v) for v in result["read"]],
         counts=[int(v) for v in result["count"]],
     )
+
+
+LAWS = ("LN_spheres", "LN_cylinders", "LN_ESDU")
+"""The event-driven laws the A/B benchmarks of two builds compare."""
+
+
+def add_build_comparison_arguments(ap: argparse.ArgumentParser) -> None:
+    """The options of a benchmark of this build's FMU binary against another build's, on the
+    first contacts of `central` in the compiled master."""
+    ap.add_argument("--baseline", type=Path, required=True, help="the other build's csfh.so")
+    ap.add_argument("--binary", type=Path, default=None, help="default: the FMU in use")
+    ap.add_argument("--laws", nargs="+", default=list(LAWS), choices=LAWS)
+    ap.add_argument("--horizon", type=float, default=0.42, help="s (first three contacts)")
+    ap.add_argument("--master", type=Path, default=default_master())
+
+
+def compared_builds(args: argparse.Namespace) -> tuple[dict[str, Path], Scene]:
+    """The two binaries ("baseline", "this") and the scene of add_build_comparison_arguments."""
+    binaries = {
+        "baseline": args.baseline,
+        "this": args.binary if args.binary is not None else Path(_binary()),
+    }
+    return binaries, replace(load_scene("central"), stop_time=args.horizon)
