@@ -100,6 +100,30 @@ void cs_free(fmu_instance_t *inst)
     inst->integration = NULL;
 }
 
+/* The next step starts the integration afresh (integration_start) in this memory: the kept
+ * steps are the last run's, and the integrators that a start does not make as new are freed
+ * (CVODE's re-initialisation keeps settings, e.g. a stop time, a new CVODE has not). */
+void cs_reset(fmu_instance_t *inst)
+{
+    cs_integration_t *cs = inst->integration;
+    if (cs == NULL) {
+        return;
+    }
+    int kept = 0;
+    for (int i = 0; i < N_INTEGRATORS; i++) {
+        integrator_t it = cs->integrators[i];
+        cs->integrators[i].ops = NULL;
+        if (it.ops != NULL && !it.ops->start_is_new) {
+            it.ops->free(it.self);
+        } else if (it.ops != NULL) {
+            cs->integrators[kept++] = it; /* integrator_of: the slots in use come first */
+        }
+    }
+    cs->current = NULL;
+    kept_clear(&cs->kept);
+    inst->restart_integration = 1;
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* the integrators of the run (times are local: cosimulation.c, time) */
 
@@ -214,6 +238,7 @@ static cs_integration_t *integration_new(fmu_instance_t *inst)
     }
     cs->live_memory = live_memory;
     cs->tolerance = inst->tolerance;
+    cs->analytic = fmu_model.cs_jacobian != NULL && fmu_model.cs_jacobian(inst->model);
     double *p = cs->arrays;
     cs->y = p, p += NX;
     cs->abstol = p, p += NX;
@@ -224,11 +249,10 @@ static cs_integration_t *integration_new(fmu_instance_t *inst)
             cs->abstol[k++] = inst->tolerance * fmu_model.variables[i].nominal;
         }
     }
-    const int analytic = fmu_model.cs_jacobian != NULL && fmu_model.cs_jacobian(inst->model);
     const cs_problem_t problem = {
         NX, fmu_model.n_event_indicators, inst->tolerance, cs->abstol, FIRST_STEP_HORIZON,
         rhs, roots, integrator_message, integrator_failed, integrator_error, inst,
-        analytic ? jacobian : NULL};
+        cs->analytic ? jacobian : NULL};
     cs->problem = problem;
     return cs;
 }
@@ -236,7 +260,8 @@ static cs_integration_t *integration_new(fmu_instance_t *inst)
 fmu_status_t integration_start(fmu_instance_t *inst)
 {
     cs_integration_t *cs = inst->integration;
-    if (cs != NULL && cs->tolerance != inst->tolerance) {
+    const int analytic = fmu_model.cs_jacobian != NULL && fmu_model.cs_jacobian(inst->model);
+    if (cs != NULL && (cs->tolerance != inst->tolerance || cs->analytic != analytic)) {
         cs_free(inst);
         cs = NULL;
     }

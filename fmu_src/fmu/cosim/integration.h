@@ -58,6 +58,7 @@ struct cs_integration {
     int hint_code;
     double *y;              /* the integrator's solution at the time it returned (NX) */
     double tolerance;       /* the relative tolerance the solver was set up with */
+    int analytic;           /* and whether with the model's Jacobian (problem.jacobian) */
     double *y_root;   /* a root (or time event) reported beyond the end of the last */
     double t_root;    /* communication step: the state there and its time, */
     int root_pending; /* STEP_ROOT, STEP_TSTOP or STEP_SWITCH, handled in the communication
