@@ -157,7 +157,9 @@ fmu_status_t integration_restart(cs_integration_t *cs, const cs_integrator_ops_t
     cs->current = it;
     cs->counted_steps = cs->counted_jacobians = 0;
     cs->root_pending = 0;
-    return ops->start(it->self, tau, cs->y, h_first) == 0 ? FMU_OK : FMU_ERROR;
+    const int started = ops->start(it->self, tau, cs->y, h_first);
+    integration_observe(cs);
+    return started == 0 ? FMU_OK : FMU_ERROR;
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -166,17 +168,13 @@ fmu_status_t integration_restart(cs_integration_t *cs, const cs_integrator_ops_t
 /* A new window of steps (the integrator's counters restart with every (re)start). */
 void integration_window(cs_integration_t *cs, double t)
 {
-    cs_counts_t c;
-    cs->current->ops->counts(cs->current->self, &c);
-    cs_auto_window(&cs->automatic, &c, t);
+    cs_auto_window(&cs->automatic, &cs->counts, t);
 }
 
 /* A new segment of smooth motion (start, event, restart): no trial, no hold-off. */
 void integration_segment(cs_integration_t *cs, double t)
 {
-    cs_counts_t c;
-    cs->current->ops->counts(cs->current->self, &c);
-    cs_auto_segment(&cs->automatic, &c, t);
+    cs_auto_segment(&cs->automatic, &cs->counts, t);
 }
 
 /* auto: at the end of each step (t: the local time), the integrator for what follows; writes
@@ -186,10 +184,8 @@ static const cs_integrator_ops_t *auto_choose(cs_integration_t *cs, double t, ch
 {
     why[0] = '\0';
     const cs_integrator_ops_t *running = cs->current->ops;
-    cs_counts_t c;
-    running->counts(cs->current->self, &c);
     char text[200];
-    const int choice = cs_auto_step_end(&cs->automatic, &c, t, running->name,
+    const int choice = cs_auto_step_end(&cs->automatic, &cs->counts, t, running->name,
                                         running == cs->method->stiff, cs->method->start->name,
                                         text, sizeof(text));
     if (text[0] != '\0') {
@@ -290,8 +286,7 @@ fmu_status_t integration_start(fmu_instance_t *inst)
 long integration_count_steps(fmu_instance_t *inst)
 {
     cs_integration_t *cs = inst->integration;
-    cs_counts_t c;
-    cs->current->ops->counts(cs->current->self, &c);
+    const cs_counts_t c = cs->counts;
     const long added = c.steps - cs->counted_steps;
     cs->counted_steps = c.steps;
     if (fmu_model.add_integrator_steps != NULL && added != 0) {
@@ -349,7 +344,7 @@ void integration_analyse_live(fmu_instance_t *inst, double ta, double tb, int st
         return;
     }
     const integrator_t *it = cs->current;
-    const double tn = it->ops->time(it->self), hu = it->ops->last_step(it->self);
+    const double tn = cs->tn, hu = cs->hu;
     const fmu_step_t step = {1, stepped, tn - hu, tn, hu, tn, inst->tolerance, live_dense,
                              NULL, NULL, tb == tn ? cs->y : NULL, NULL, NULL, cs->live_memory,
                              NULL, it->ops->save_step != NULL ? live_keep : NULL};

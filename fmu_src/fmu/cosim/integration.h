@@ -73,13 +73,26 @@ struct cs_integration {
     kept_steps_t kept;
     double origin;      /* s: the integrator's time 0 (cosimulation.c: time); its times are local */
     long warnings;      /* CVODE warnings so far (integrator_message) */
+    /* the running integrator as its last start or step left it (integration_observe): the end
+     * of its last step, that step's size and its counts; read many times per step */
+    double tn, hu;
+    cs_counts_t counts;
     double arrays[];    /* y, abstol, y_root: one block with the struct */
 };
 
-/* The integrator running. */
+/* What the running integrator reports after a start or a step (cs->tn, hu, counts). */
+static inline void integration_observe(cs_integration_t *cs)
+{
+    const integrator_t *it = cs->current;
+    cs->tn = it->ops->time(it->self);
+    cs->hu = it->ops->last_step(it->self);
+    it->ops->counts(it->self, &cs->counts);
+}
+
+/* The end of the running integrator's last step (its start before one). */
 static inline double integration_time(const cs_integration_t *cs)
 {
-    return cs->current->ops->time(cs->current->self);
+    return cs->tn;
 }
 
 static inline int integration_dense(const cs_integration_t *cs, double t, int k, double *out)
@@ -91,7 +104,9 @@ static inline int integration_dense(const cs_integration_t *cs, double t, int k,
  * STEP_FAILED (logged); (tret, cs->y) is the point reached, on failure the last successful one. */
 static inline int integration_step(cs_integration_t *cs, double *tret)
 {
-    return cs->current->ops->step(cs->current->self, tret, cs->y);
+    const int flag = cs->current->ops->step(cs->current->self, tret, cs->y);
+    integration_observe(cs);
+    return flag;
 }
 
 /* The next stop time (local; > the integrator's current time): no step goes beyond it. */
