@@ -102,9 +102,12 @@ fmu_status_t fmu_get_values(fmu_instance_t *inst, const char *function, const un
     }
     fmu_status_t status = FMU_OK;
     const char *model = (const char *)inst->model;
+    /* read once: the values written could alias the instance for all the compiler knows */
+    const fmu_vr_get_t *const table = inst->vr_get;
+    const unsigned int n_index = inst->n_vr_index;
     for (size_t i = 0; i < nvr; i++) {
         /* the reference's 8-byte entry (fmu_vr_get_t); lookup only for the message */
-        const fmu_vr_get_t *e = vr[i] < inst->n_vr_index ? &inst->vr_get[vr[i]] : NULL;
+        const fmu_vr_get_t *e = vr[i] < n_index ? &table[vr[i]] : NULL;
         if (e == NULL || (accept & e->accept) == 0) {
             lookup(inst, function, vr[i], accept);
             return FMU_ERROR;
