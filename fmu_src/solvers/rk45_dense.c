@@ -39,8 +39,10 @@ void rk45_dense_coefficients(rk45_t *r)
 }
 
 /* The dense output (k = 0) or its derivative (k = 1) at theta in [0, 1] of a step of size h
- * from Shampine's coefficients r1..r5 (each n long, consecutive). */
-static void dense_eval(const double *c, int n, double h, double th, int k, double *out)
+ * from Shampine's coefficients r1..r5 (each n long, consecutive; out is never one of them: the
+ * loops need no overlap checks). */
+static void dense_eval(const double *restrict c, int n, double h, double th, int k,
+                       double *restrict out)
 {
     const double th1 = 1.0 - th;
     const double *r1 = c, *r2 = c + n, *r3 = c + 2 * n, *r4 = c + 3 * n, *r5 = c + 4 * n;
