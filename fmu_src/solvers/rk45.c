@@ -291,14 +291,21 @@ static int stages(rk45_t *r, double t0, double h)
 
 /* The error estimate of the step of size h (the embedded 4th-order solution's difference) in
  * the weighted RMS norm. */
+/* The embedded solution's difference (h times the error stages) into w (the vectors distinct:
+ * the loop needs no overlap checks). */
+static void error_vector(int n, double h, const double *restrict k1, const double *restrict k3,
+                         const double *restrict k4, const double *restrict k5,
+                         const double *restrict k6, const double *restrict k7,
+                         double *restrict w)
+{
+    for (int i = 0; i < n; i++) {
+        w[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
+    }
+}
+
 static double error_norm(rk45_t *r, double h)
 {
-    const double *k1 = r->k[0], *k3 = r->k[2], *k4 = r->k[3], *k5 = r->k[4], *k6 = r->k[5],
-                 *k7 = r->k[6];
-    for (int i = 0; i < r->n; i++) {
-        r->w[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] +
-                       E7 * k7[i]);
-    }
+    error_vector(r->n, h, r->k[0], r->k[2], r->k[3], r->k[4], r->k[5], r->k[6], r->w);
     return wrms(r, r->w, r->y, r->y_new);
 }
 
