@@ -219,6 +219,8 @@ static const method_t *configured_method(const fmu_instance_t *inst)
     return &METHODS[m >= 0 && m < (int)(sizeof(METHODS) / sizeof(METHODS[0])) ? m : FMU_CS_BDF];
 }
 
+static int live_dense(const fmu_step_t *step, double t, int k, double *out);
+
 /* The integration's memory, with the absolute tolerances (relative x the nominal value of each
  * state) and the problem every integrator solves; NULL when out of memory (logged). */
 static cs_integration_t *integration_new(fmu_instance_t *inst)
@@ -250,6 +252,11 @@ static cs_integration_t *integration_new(fmu_instance_t *inst)
         rhs, roots, integrator_message, integrator_failed, integrator_error, inst,
         cs->analytic ? jacobian : NULL};
     cs->problem = problem;
+    const live_view_t live = {{1, 0, 0.0, 0.0, 0.0, 0.0, inst->tolerance, live_dense, NULL, NULL,
+                               NULL, NULL, NULL, live_memory, NULL, NULL},
+                              inst,
+                              0.0};
+    cs->live = live;
     return cs;
 }
 
@@ -305,13 +312,6 @@ long integration_count_steps(fmu_instance_t *inst)
  * of an integrator that can save them are kept (kept_steps.h) and handed over when the model's
  * outputs are needed; the others are handed over live, at every pass of cs_do_step's loop */
 
-/* The live step as the model sees it (fmu_step_t first: its calls come back with it). */
-typedef struct {
-    fmu_step_t step;
-    fmu_instance_t *inst;
-    double from; /* where the communication step had got to before it */
-} live_view_t;
-
 static int live_dense(const fmu_step_t *step, double t, int k, double *out)
 {
     const live_view_t *v = (const live_view_t *)(const void *)step;
@@ -343,13 +343,16 @@ void integration_analyse_live(fmu_instance_t *inst, double ta, double tb, int st
     if (fmu_model.analyse_step == NULL) {
         return;
     }
-    const integrator_t *it = cs->current;
     const double tn = cs->tn, hu = cs->hu;
-    const fmu_step_t step = {1, stepped, tn - hu, tn, hu, tn, inst->tolerance, live_dense,
-                             NULL, NULL, tb == tn ? cs->y : NULL, NULL, NULL, cs->live_memory,
-                             NULL, it->ops->save_step != NULL ? live_keep : NULL};
-    const live_view_t v = {step, inst, ta};
-    fmu_model.analyse_step(inst->model, &v.step, ta, tb);
+    live_view_t *v = &cs->live; /* (the rest: integration_new) */
+    v->step.new_step = stepped;
+    v->step.t0 = tn - hu;
+    v->step.tn = v->step.cut = tn;
+    v->step.h = hu;
+    v->step.y1 = tb == tn ? cs->y : NULL;
+    v->step.keep = cs->current->ops->save_step != NULL ? live_keep : NULL;
+    v->from = ta;
+    fmu_model.analyse_step(inst->model, &v->step, ta, tb);
 }
 
 void cs_flush(fmu_instance_t *inst)

@@ -44,6 +44,13 @@ typedef struct {
 /* the integrators a run can use (one of each: a restored FMU state may bring another method) */
 #define N_INTEGRATORS 3
 
+/* The live step as the model sees it (fmu_step_t first: its calls come back with it). */
+typedef struct {
+    fmu_step_t step;
+    fmu_instance_t *inst;
+    double from; /* where the communication step had got to before it */
+} live_view_t;
+
 struct cs_integration {
     integrator_t integrators[N_INTEGRATORS];
     integrator_t *current;  /* the integrator running */
@@ -70,6 +77,7 @@ struct cs_integration {
     /* the model's analysis of the steps (analyse_live, kept_steps.h) */
     double comm_start;        /* the communication step being taken: (comm_start, FMU time] */
     void *live_memory;        /* the model's memory of the live steps (step_memory bytes) */
+    live_view_t live;         /* the last live step handed over (what stays is set once) */
     kept_steps_t kept;
     double origin;      /* s: the integrator's time 0 (cosimulation.c: time); its times are local */
     long warnings;      /* CVODE warnings so far (integrator_message) */
