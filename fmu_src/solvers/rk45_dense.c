@@ -69,6 +69,15 @@ static void dense_eval(const double *restrict c, int n, double h, double th, int
     }
 }
 
+void rk45_dense_inside(rk45_t *r, double t, double *out)
+{
+    rk45_dense_coefficients(r);
+    const double h = r->h_last;
+    double th = (t - r->t_old) / h;
+    th = th < 0.0 ? 0.0 : (th > 1.0 ? 1.0 : th);
+    dense_eval(r->dense[0], r->n, h, th, 0, out);
+}
+
 int rk45_dense(rk45_t *r, double t, int k, double *out)
 {
     if (!r->have_step || (k != 0 && k != 1)) {
