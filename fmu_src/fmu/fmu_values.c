@@ -107,11 +107,11 @@ fmu_status_t fmu_get_values(fmu_instance_t *inst, const char *function, const un
     const unsigned int n_index = inst->n_vr_index;
     for (size_t i = 0; i < nvr; i++) {
         /* the reference's 8-byte entry (fmu_vr_get_t); lookup only for the message */
-        const fmu_vr_get_t *e = vr[i] < n_index ? &table[vr[i]] : NULL;
-        if (e == NULL || (accept & e->accept) == 0) {
+        if (vr[i] >= n_index || (accept & table[vr[i]].accept) == 0) {
             lookup(inst, function, vr[i], accept);
             return FMU_ERROR;
         }
+        const fmu_vr_get_t *e = &table[vr[i]];
         /* up-to-date outputs (the common case) are seen here, without a call per value */
         if (e->refresh != FMU_REFRESH_NONE && !up_to_date(inst, e->refresh)) {
             const unsigned char what =
