@@ -118,7 +118,9 @@ void fmu_instance_free(fmu_instance_t *inst)
 
 void fmu_instance_reset(fmu_instance_t *inst)
 {
-    stepper_free(inst);
+    if (inst->stepper != NULL) {
+        inst->stepper->reset(inst);
+    }
     fmu_model.set_defaults(inst->model);
     inst->prepared = 0;
     inst->warned_outputs = 0;

@@ -10,6 +10,12 @@
  * seconds, give. */
 #define COMM_POINT_ROUNDOFF (16.0 * DBL_EPSILON)
 
+/* fmax (the same value, also for a NaN argument), inline: libm's is a call on every step */
+static inline double larger(double a, double b)
+{
+    return (a > b || b != b) ? a : b;
+}
+
 /* The step's arguments against the FMU's time T: the communication point t must be T up to
  * round-off (COMM_POINT_ROUNDOFF; a t behind T would take the time backwards, one ahead would
  * skip an interval), the step h finite and >= 0, and the end t + h (computed as the master
@@ -28,11 +34,11 @@ fmu_status_t fmu_check_step(fmu_instance_t *inst, const char *function, double t
                   function, t, h);
         return FMU_ERROR;
     }
-    if (fabs(t - T) > COMM_POINT_ROUNDOFF * fmax(fabs(t), fabs(T))) {
+    if (fabs(t - T) > COMM_POINT_ROUNDOFF * larger(fabs(t), fabs(T))) {
         FMU_LOG_ERROR(inst, "%s: currentCommunicationPoint = %.17g does not match the FMU time "
                         "%.17g (%s by %.3g s; allowed: round-off, %.3g s)",
                   function, t, T, t < T ? "behind" : "ahead", fabs(t - T),
-                  COMM_POINT_ROUNDOFF * fmax(fabs(t), fabs(T)));
+                  COMM_POINT_ROUNDOFF * larger(fabs(t), fabs(T)));
         return FMU_ERROR;
     }
     *t_end = t + h;

@@ -64,6 +64,8 @@ typedef struct fmu_instance fmu_instance_t;
  * the dependencies go one way: front-end -> stepper -> instance -> model. */
 typedef struct {
     void (*free)(fmu_instance_t *inst);  /* release the integrator (none: nothing) */
+    /* the instance is reset: the next step starts as in a new instance (the memory may stay) */
+    void (*reset)(fmu_instance_t *inst);
     /* bring the model's analysis of the communication step's integrator steps up to date */
     void (*flush)(fmu_instance_t *inst);
 } fmu_stepper_t;

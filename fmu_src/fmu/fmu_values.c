@@ -102,13 +102,16 @@ fmu_status_t fmu_get_values(fmu_instance_t *inst, const char *function, const un
     }
     fmu_status_t status = FMU_OK;
     const char *model = (const char *)inst->model;
+    /* read once: the values written could alias the instance for all the compiler knows */
+    const fmu_vr_get_t *const table = inst->vr_get;
+    const unsigned int n_index = inst->n_vr_index;
     for (size_t i = 0; i < nvr; i++) {
         /* the reference's 8-byte entry (fmu_vr_get_t); lookup only for the message */
-        const fmu_vr_get_t *e = vr[i] < inst->n_vr_index ? &inst->vr_get[vr[i]] : NULL;
-        if (e == NULL || (accept & e->accept) == 0) {
+        if (vr[i] >= n_index || (accept & table[vr[i]].accept) == 0) {
             lookup(inst, function, vr[i], accept);
             return FMU_ERROR;
         }
+        const fmu_vr_get_t *e = &table[vr[i]];
         /* up-to-date outputs (the common case) are seen here, without a call per value */
         if (e->refresh != FMU_REFRESH_NONE && !up_to_date(inst, e->refresh)) {
             const unsigned char what =

@@ -234,64 +234,78 @@ static int stage(rk45_t *r, double t0, double c, double h, const double *y, doub
     return r->f(t0 + c * h, y, k, r->user);
 }
 
-/* The stages 2..7 of a step of size h from (t0, y) (stage 7 is the solution y_new, and its f the
- * next step's first stage): the status of f, 0 or that of the first stage that failed. */
-static int stages(rk45_t *r, double t0, double h)
+/* The stages 2..7 of a step of size h from (t0, y0) (stage 7 is the solution yn, and its f the
+ * next step's first stage): the status of f, 0 or that of the first stage that failed. The
+ * vectors are distinct ones of the block (rk45_create), each reached only through its argument
+ * here (f writes a stage through the one it is given): the loops need no overlap checks. */
+static int stages_of(rk45_t *r, double t0, double h, const double *restrict y0,
+                     const double *restrict k1, double *restrict k2, double *restrict k3,
+                     double *restrict k4, double *restrict k5, double *restrict k6,
+                     double *restrict k7, double *restrict ys, double *restrict yn)
 {
     const int n = r->n;
-    const double *y0 = r->y;
-    const double *k1 = r->k[0], *k2 = r->k[1], *k3 = r->k[2], *k4 = r->k[3], *k5 = r->k[4],
-                 *k6 = r->k[5];
-    double *const ys = r->ys, *const yn = r->y_new;
     int status;
     for (int i = 0; i < n; i++) {
         ys[i] = y0[i] + h * A21 * k1[i];
     }
-    if ((status = stage(r, t0, C2, h, ys, r->k[1])) != 0) {
+    if ((status = stage(r, t0, C2, h, ys, k2)) != 0) {
         return status;
     }
     for (int i = 0; i < n; i++) {
         ys[i] = y0[i] + h * (A31 * k1[i] + A32 * k2[i]);
     }
-    if ((status = stage(r, t0, C3, h, ys, r->k[2])) != 0) {
+    if ((status = stage(r, t0, C3, h, ys, k3)) != 0) {
         return status;
     }
     for (int i = 0; i < n; i++) {
         ys[i] = y0[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
     }
-    if ((status = stage(r, t0, C4, h, ys, r->k[3])) != 0) {
+    if ((status = stage(r, t0, C4, h, ys, k4)) != 0) {
         return status;
     }
     for (int i = 0; i < n; i++) {
         ys[i] = y0[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
     }
-    if ((status = stage(r, t0, C5, h, ys, r->k[4])) != 0) {
+    if ((status = stage(r, t0, C5, h, ys, k5)) != 0) {
         return status;
     }
     for (int i = 0; i < n; i++) {
         ys[i] = y0[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] +
                              A65 * k5[i]);
     }
-    if ((status = stage(r, t0, 1.0, h, ys, r->k[5])) != 0) {
+    if ((status = stage(r, t0, 1.0, h, ys, k6)) != 0) {
         return status;
     }
     for (int i = 0; i < n; i++) {
         yn[i] = y0[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] +
                              A76 * k6[i]);
     }
-    return stage(r, t0, 1.0, h, yn, r->k[6]);
+    return stage(r, t0, 1.0, h, yn, k7);
+}
+
+static int stages(rk45_t *r, double t0, double h)
+{
+    return stages_of(r, t0, h, r->y, r->k[0], r->k[1], r->k[2], r->k[3], r->k[4], r->k[5],
+                     r->k[6], r->ys, r->y_new);
 }
 
 /* The error estimate of the step of size h (the embedded 4th-order solution's difference) in
  * the weighted RMS norm. */
+/* The embedded solution's difference (h times the error stages) into w (the vectors distinct:
+ * the loop needs no overlap checks). */
+static void error_vector(int n, double h, const double *restrict k1, const double *restrict k3,
+                         const double *restrict k4, const double *restrict k5,
+                         const double *restrict k6, const double *restrict k7,
+                         double *restrict w)
+{
+    for (int i = 0; i < n; i++) {
+        w[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
+    }
+}
+
 static double error_norm(rk45_t *r, double h)
 {
-    const double *k1 = r->k[0], *k3 = r->k[2], *k4 = r->k[3], *k5 = r->k[4], *k6 = r->k[5],
-                 *k7 = r->k[6];
-    for (int i = 0; i < r->n; i++) {
-        r->w[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] +
-                       E7 * k7[i]);
-    }
+    error_vector(r->n, h, r->k[0], r->k[2], r->k[3], r->k[4], r->k[5], r->k[6], r->w);
     return wrms(r, r->w, r->y, r->y_new);
 }
 

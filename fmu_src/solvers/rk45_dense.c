@@ -16,31 +16,40 @@
 #define D7 (69997945.0 / 29380423.0)
 
 
+/* The coefficients r1..r5 (consecutive in d) of the step of size h from y_old to y with the
+ * stages k[0..6] (none of them in d: the loop needs no overlap checks). */
+static void coefficients(int n, double h, const double *restrict y_old, const double *restrict y,
+                         const double *const k[7], double *restrict d)
+{
+    const double *restrict k1 = k[0], *restrict k3 = k[2], *restrict k4 = k[3],
+                           *restrict k5 = k[4], *restrict k6 = k[5], *restrict k7 = k[6];
+    for (int i = 0; i < n; i++) {
+        const double dy = y[i] - y_old[i];
+        const double b = h * k1[i] - dy;
+        d[i] = y_old[i];
+        d[n + i] = dy;
+        d[2 * n + i] = b;
+        d[3 * n + i] = dy - h * k7[i] - b;
+        d[4 * n + i] =
+            h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
+    }
+}
+
 /* Shampine's coefficients of the last step, once per step. */
 void rk45_dense_coefficients(rk45_t *r)
 {
     if (r->dense_valid) {
         return;
     }
-    const double h = r->h_last;
-    const double *k1 = r->k[0], *k3 = r->k[2], *k4 = r->k[3], *k5 = r->k[4], *k6 = r->k[5],
-                 *k7 = r->k[6];
-    for (int i = 0; i < r->n; i++) {
-        const double dy = r->y[i] - r->y_old[i];
-        const double b = h * k1[i] - dy;
-        r->dense[0][i] = r->y_old[i];
-        r->dense[1][i] = dy;
-        r->dense[2][i] = b;
-        r->dense[3][i] = dy - h * k7[i] - b;
-        r->dense[4][i] =
-            h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
-    }
+    coefficients(r->n, r->h_last, r->y_old, r->y, (const double *const *)r->k, r->dense[0]);
     r->dense_valid = 1;
 }
 
 /* The dense output (k = 0) or its derivative (k = 1) at theta in [0, 1] of a step of size h
- * from Shampine's coefficients r1..r5 (each n long, consecutive). */
-static void dense_eval(const double *c, int n, double h, double th, int k, double *out)
+ * from Shampine's coefficients r1..r5 (each n long, consecutive; out is never one of them: the
+ * loops need no overlap checks). */
+static void dense_eval(const double *restrict c, int n, double h, double th, int k,
+                       double *restrict out)
 {
     const double th1 = 1.0 - th;
     const double *r1 = c, *r2 = c + n, *r3 = c + 2 * n, *r4 = c + 3 * n, *r5 = c + 4 * n;
@@ -58,6 +67,15 @@ static void dense_eval(const double *c, int n, double h, double th, int k, doubl
             out[i] = (a + th * da) / h;
         }
     }
+}
+
+void rk45_dense_inside(rk45_t *r, double t, double *out)
+{
+    rk45_dense_coefficients(r);
+    const double h = r->h_last;
+    double th = (t - r->t_old) / h;
+    th = th < 0.0 ? 0.0 : (th > 1.0 ? 1.0 : th);
+    dense_eval(r->dense[0], r->n, h, th, 0, out);
 }
 
 int rk45_dense(rk45_t *r, double t, int k, double *out)

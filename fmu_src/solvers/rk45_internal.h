@@ -62,6 +62,9 @@ void rk45_set_message(rk45_t *r, const char *fmt, ...);
 
 /* Shampine's coefficients of the last step, once per step (rk45_dense.c). */
 void rk45_dense_coefficients(rk45_t *r);
+/* rk45_dense's state at a t known to lie in the last step (root finding: inside the bracket),
+ * without its checks (rk45_dense.c). */
+void rk45_dense_inside(rk45_t *r, double t, double *out);
 
 /* g at (t, y) into g: RK45_SUCCESS or RK45_ROOT_FAILURE (rk45_roots.c). */
 int rk45_eval_roots(rk45_t *r, double t, const double *y, double *g);

@@ -138,7 +138,7 @@ static int find_root(rk45_t *r, double t_lo, double *t_root, int *y_known)
     while (t_hi - t_lo > ttol) {
         const double t_mid =
             next_point(r, t_lo, t_hi, r->g_lo[imax], r->g_hi[imax], &b, ttol);
-        rk45_dense(r, t_mid, 0, r->w);
+        rk45_dense_inside(r, t_mid, r->w);
         const int rs = rk45_eval_roots(r, t_mid, r->w, r->g_mid);
         if (rs != RK45_SUCCESS) {
             return rs;
@@ -194,7 +194,7 @@ int rk45_check_roots(rk45_t *r, double t_lo, double *t, double *y)
             if (y_known) {
                 memcpy(y, r->y_mid, (size_t)r->n * sizeof(double));
             } else {
-                rk45_dense(r, t_root, 0, y);
+                rk45_dense_inside(r, t_root, y);
             }
             *t = t_root;
             r->t_lo = t_root;

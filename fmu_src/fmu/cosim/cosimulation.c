@@ -372,10 +372,4 @@ fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end_abs, int stop_at_even
     return finish_step(inst, t_end_abs, cs->warnings > c.warnings ? FMU_WARNING : FMU_OK);
 }
 
-fmu_status_t cs_reset(fmu_instance_t *inst)
-{
-    cs_free(inst);
-    return FMU_OK;
-}
-
-const fmu_stepper_t cs_stepper = {cs_free, cs_flush};
+const fmu_stepper_t cs_stepper = {cs_free, cs_reset, cs_flush};

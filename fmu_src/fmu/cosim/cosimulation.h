@@ -19,7 +19,9 @@ void cs_free(fmu_instance_t *inst);
  * *stopped = 1 (FMI 3.0 early return); else the step goes to t_end, however many events it
  * holds (*stopped = 0; stopped may be NULL). */
 fmu_status_t cs_do_step(fmu_instance_t *inst, double t_end, int stop_at_event, int *stopped);
-fmu_status_t cs_reset(fmu_instance_t *inst);
+/* fmi2Reset, fmi3Reset: the next step starts the integration as in a new instance, in the
+ * memory of the last run (what a re-initialisation cannot make as new is freed). */
+void cs_reset(fmu_instance_t *inst);
 /* Hand the kept steps of the communication step to the model (fmu_model.analyse_step: the
  * steps of RK45 are analysed only when needed): before the outputs are computed, an FMU state is
  * taken or values are set. Nothing without co-simulation. */

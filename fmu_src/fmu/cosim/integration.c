@@ -100,6 +100,30 @@ void cs_free(fmu_instance_t *inst)
     inst->integration = NULL;
 }
 
+/* The next step starts the integration afresh (integration_start) in this memory: the kept
+ * steps are the last run's, and the integrators that a start does not make as new are freed
+ * (CVODE's re-initialisation keeps settings, e.g. a stop time, a new CVODE has not). */
+void cs_reset(fmu_instance_t *inst)
+{
+    cs_integration_t *cs = inst->integration;
+    if (cs == NULL) {
+        return;
+    }
+    int kept = 0;
+    for (int i = 0; i < N_INTEGRATORS; i++) {
+        integrator_t it = cs->integrators[i];
+        cs->integrators[i].ops = NULL;
+        if (it.ops != NULL && !it.ops->start_is_new) {
+            it.ops->free(it.self);
+        } else if (it.ops != NULL) {
+            cs->integrators[kept++] = it; /* integrator_of: the slots in use come first */
+        }
+    }
+    cs->current = NULL;
+    kept_clear(&cs->kept);
+    inst->restart_integration = 1;
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* the integrators of the run (times are local: cosimulation.c, time) */
 
@@ -133,7 +157,9 @@ fmu_status_t integration_restart(cs_integration_t *cs, const cs_integrator_ops_t
     cs->current = it;
     cs->counted_steps = cs->counted_jacobians = 0;
     cs->root_pending = 0;
-    return ops->start(it->self, tau, cs->y, h_first) == 0 ? FMU_OK : FMU_ERROR;
+    const int started = ops->start(it->self, tau, cs->y, h_first);
+    integration_observe(cs);
+    return started == 0 ? FMU_OK : FMU_ERROR;
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -142,17 +168,13 @@ fmu_status_t integration_restart(cs_integration_t *cs, const cs_integrator_ops_t
 /* A new window of steps (the integrator's counters restart with every (re)start). */
 void integration_window(cs_integration_t *cs, double t)
 {
-    cs_counts_t c;
-    cs->current->ops->counts(cs->current->self, &c);
-    cs_auto_window(&cs->automatic, &c, t);
+    cs_auto_window(&cs->automatic, &cs->counts, t);
 }
 
 /* A new segment of smooth motion (start, event, restart): no trial, no hold-off. */
 void integration_segment(cs_integration_t *cs, double t)
 {
-    cs_counts_t c;
-    cs->current->ops->counts(cs->current->self, &c);
-    cs_auto_segment(&cs->automatic, &c, t);
+    cs_auto_segment(&cs->automatic, &cs->counts, t);
 }
 
 /* auto: at the end of each step (t: the local time), the integrator for what follows; writes
@@ -162,10 +184,8 @@ static const cs_integrator_ops_t *auto_choose(cs_integration_t *cs, double t, ch
 {
     why[0] = '\0';
     const cs_integrator_ops_t *running = cs->current->ops;
-    cs_counts_t c;
-    running->counts(cs->current->self, &c);
     char text[200];
-    const int choice = cs_auto_step_end(&cs->automatic, &c, t, running->name,
+    const int choice = cs_auto_step_end(&cs->automatic, &cs->counts, t, running->name,
                                         running == cs->method->stiff, cs->method->start->name,
                                         text, sizeof(text));
     if (text[0] != '\0') {
@@ -199,6 +219,8 @@ static const method_t *configured_method(const fmu_instance_t *inst)
     return &METHODS[m >= 0 && m < (int)(sizeof(METHODS) / sizeof(METHODS[0])) ? m : FMU_CS_BDF];
 }
 
+static int live_dense(const fmu_step_t *step, double t, int k, double *out);
+
 /* The integration's memory, with the absolute tolerances (relative x the nominal value of each
  * state) and the problem every integrator solves; NULL when out of memory (logged). */
 static cs_integration_t *integration_new(fmu_instance_t *inst)
@@ -214,6 +236,7 @@ static cs_integration_t *integration_new(fmu_instance_t *inst)
     }
     cs->live_memory = live_memory;
     cs->tolerance = inst->tolerance;
+    cs->analytic = fmu_model.cs_jacobian != NULL && fmu_model.cs_jacobian(inst->model);
     double *p = cs->arrays;
     cs->y = p, p += NX;
     cs->abstol = p, p += NX;
@@ -224,19 +247,24 @@ static cs_integration_t *integration_new(fmu_instance_t *inst)
             cs->abstol[k++] = inst->tolerance * fmu_model.variables[i].nominal;
         }
     }
-    const int analytic = fmu_model.cs_jacobian != NULL && fmu_model.cs_jacobian(inst->model);
     const cs_problem_t problem = {
         NX, fmu_model.n_event_indicators, inst->tolerance, cs->abstol, FIRST_STEP_HORIZON,
         rhs, roots, integrator_message, integrator_failed, integrator_error, inst,
-        analytic ? jacobian : NULL};
+        cs->analytic ? jacobian : NULL};
     cs->problem = problem;
+    const live_view_t live = {{1, 0, 0.0, 0.0, 0.0, 0.0, inst->tolerance, live_dense, NULL, NULL,
+                               NULL, NULL, NULL, live_memory, NULL, NULL},
+                              inst,
+                              0.0};
+    cs->live = live;
     return cs;
 }
 
 fmu_status_t integration_start(fmu_instance_t *inst)
 {
     cs_integration_t *cs = inst->integration;
-    if (cs != NULL && cs->tolerance != inst->tolerance) {
+    const int analytic = fmu_model.cs_jacobian != NULL && fmu_model.cs_jacobian(inst->model);
+    if (cs != NULL && (cs->tolerance != inst->tolerance || cs->analytic != analytic)) {
         cs_free(inst);
         cs = NULL;
     }
@@ -265,8 +293,7 @@ fmu_status_t integration_start(fmu_instance_t *inst)
 long integration_count_steps(fmu_instance_t *inst)
 {
     cs_integration_t *cs = inst->integration;
-    cs_counts_t c;
-    cs->current->ops->counts(cs->current->self, &c);
+    const cs_counts_t c = cs->counts;
     const long added = c.steps - cs->counted_steps;
     cs->counted_steps = c.steps;
     if (fmu_model.add_integrator_steps != NULL && added != 0) {
@@ -284,13 +311,6 @@ long integration_count_steps(fmu_instance_t *inst)
 /* the model's analysis of the steps (fmu_model.analyse_step; csfh: the peak outputs): the steps
  * of an integrator that can save them are kept (kept_steps.h) and handed over when the model's
  * outputs are needed; the others are handed over live, at every pass of cs_do_step's loop */
-
-/* The live step as the model sees it (fmu_step_t first: its calls come back with it). */
-typedef struct {
-    fmu_step_t step;
-    fmu_instance_t *inst;
-    double from; /* where the communication step had got to before it */
-} live_view_t;
 
 static int live_dense(const fmu_step_t *step, double t, int k, double *out)
 {
@@ -323,13 +343,16 @@ void integration_analyse_live(fmu_instance_t *inst, double ta, double tb, int st
     if (fmu_model.analyse_step == NULL) {
         return;
     }
-    const integrator_t *it = cs->current;
-    const double tn = it->ops->time(it->self), hu = it->ops->last_step(it->self);
-    const fmu_step_t step = {1, stepped, tn - hu, tn, hu, tn, inst->tolerance, live_dense,
-                             NULL, NULL, tb == tn ? cs->y : NULL, NULL, NULL, cs->live_memory,
-                             NULL, it->ops->save_step != NULL ? live_keep : NULL};
-    const live_view_t v = {step, inst, ta};
-    fmu_model.analyse_step(inst->model, &v.step, ta, tb);
+    const double tn = cs->tn, hu = cs->hu;
+    live_view_t *v = &cs->live; /* (the rest: integration_new) */
+    v->step.new_step = stepped;
+    v->step.t0 = tn - hu;
+    v->step.tn = v->step.cut = tn;
+    v->step.h = hu;
+    v->step.y1 = tb == tn ? cs->y : NULL;
+    v->step.keep = cs->current->ops->save_step != NULL ? live_keep : NULL;
+    v->from = ta;
+    fmu_model.analyse_step(inst->model, &v->step, ta, tb);
 }
 
 void cs_flush(fmu_instance_t *inst)

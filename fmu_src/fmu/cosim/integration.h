@@ -44,6 +44,13 @@ typedef struct {
 /* the integrators a run can use (one of each: a restored FMU state may bring another method) */
 #define N_INTEGRATORS 3
 
+/* The live step as the model sees it (fmu_step_t first: its calls come back with it). */
+typedef struct {
+    fmu_step_t step;
+    fmu_instance_t *inst;
+    double from; /* where the communication step had got to before it */
+} live_view_t;
+
 struct cs_integration {
     integrator_t integrators[N_INTEGRATORS];
     integrator_t *current;  /* the integrator running */
@@ -58,6 +65,7 @@ struct cs_integration {
     int hint_code;
     double *y;              /* the integrator's solution at the time it returned (NX) */
     double tolerance;       /* the relative tolerance the solver was set up with */
+    int analytic;           /* and whether with the model's Jacobian (problem.jacobian) */
     double *y_root;   /* a root (or time event) reported beyond the end of the last */
     double t_root;    /* communication step: the state there and its time, */
     int root_pending; /* STEP_ROOT, STEP_TSTOP or STEP_SWITCH, handled in the communication
@@ -69,16 +77,30 @@ struct cs_integration {
     /* the model's analysis of the steps (analyse_live, kept_steps.h) */
     double comm_start;        /* the communication step being taken: (comm_start, FMU time] */
     void *live_memory;        /* the model's memory of the live steps (step_memory bytes) */
+    live_view_t live;         /* the last live step handed over (what stays is set once) */
     kept_steps_t kept;
     double origin;      /* s: the integrator's time 0 (cosimulation.c: time); its times are local */
     long warnings;      /* CVODE warnings so far (integrator_message) */
+    /* the running integrator as its last start or step left it (integration_observe): the end
+     * of its last step, that step's size and its counts; read many times per step */
+    double tn, hu;
+    cs_counts_t counts;
     double arrays[];    /* y, abstol, y_root: one block with the struct */
 };
 
-/* The integrator running. */
+/* What the running integrator reports after a start or a step (cs->tn, hu, counts). */
+static inline void integration_observe(cs_integration_t *cs)
+{
+    const integrator_t *it = cs->current;
+    cs->tn = it->ops->time(it->self);
+    cs->hu = it->ops->last_step(it->self);
+    it->ops->counts(it->self, &cs->counts);
+}
+
+/* The end of the running integrator's last step (its start before one). */
 static inline double integration_time(const cs_integration_t *cs)
 {
-    return cs->current->ops->time(cs->current->self);
+    return cs->tn;
 }
 
 static inline int integration_dense(const cs_integration_t *cs, double t, int k, double *out)
@@ -90,7 +112,9 @@ static inline int integration_dense(const cs_integration_t *cs, double t, int k,
  * STEP_FAILED (logged); (tret, cs->y) is the point reached, on failure the last successful one. */
 static inline int integration_step(cs_integration_t *cs, double *tret)
 {
-    return cs->current->ops->step(cs->current->self, tret, cs->y);
+    const int flag = cs->current->ops->step(cs->current->self, tret, cs->y);
+    integration_observe(cs);
+    return flag;
 }
 
 /* The next stop time (local; > the integrator's current time): no step goes beyond it. */

@@ -63,6 +63,9 @@ typedef struct {
 
 typedef struct {
     const char *name; /* in messages: "RK45", "BDF", "Adams" */
+    /* 1: start leaves nothing of the earlier runs that shapes the solution (the integrator is
+     * kept across a reset of the instance); 0: it is made anew */
+    int start_is_new;
     /* An integrator of the problem (copied), or NULL (reported). Nothing is solved yet. */
     void *(*create)(const cs_problem_t *problem);
     void (*free)(void *it);

@@ -376,7 +376,8 @@ static void cvode_integrator_counts(const void *self, cs_counts_t *counts)
 
 #define CVODE_OPS(method_name, create_fn)                                                      \
     {                                                                                          \
-        .name = method_name, .create = create_fn, .free = cvode_integrator_free,               \
+        .name = method_name, .start_is_new = 0, .create = create_fn,                           \
+        .free = cvode_integrator_free,                                                         \
         .start = cvode_integrator_start, .step = cvode_integrator_step,                        \
         .set_stop_time = cvode_integrator_set_stop_time, .dense = cvode_integrator_dense,      \
         .time = cvode_integrator_time, .last_step = cvode_integrator_last_step,                \

@@ -129,6 +129,7 @@ static void rk45_integrator_record_view(const double *record, int n, cs_record_v
 
 const cs_integrator_ops_t cs_integrator_rk45 = {
     .name = "RK45",
+    .start_is_new = 1, /* rk45_init sets every value a step uses */
     .create = rk45_integrator_create,
     .free = rk45_integrator_free,
     .start = rk45_integrator_start,
