@@ -76,6 +76,13 @@ def one_run(master: Path, binary: Path, scene: Scene, law: str, rtol: float) -> 
         )
         for n in (2, 1)
     )
+    if not all(two[k] > 0 for k in CALLBACKS):
+        # callgrind names the callbacks from the binary's symbols, which a stripped build lacks
+        raise SystemExit(
+            f"bench_cs_profile: no calls of {' or '.join(CALLBACKS)} seen in {binary}: a "
+            "binary without symbols (the installed FMU's after tools/test.sh is the stripped "
+            "cross build); pass --binary build/binaries/csfh/linux64/csfh.so"
+        )
     return {k: two[k] - one[k] for k in two}
 
 
